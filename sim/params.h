@@ -1,0 +1,86 @@
+#pragma once
+/// The typed parameter table: every simulation parameter declared once with name, unit, range, default and a
+/// one-line description. It drives scene loading and validation and the GUI panel (after SPlisHSPlasH's
+/// `initParameters`, without its global registry).
+
+#include <array>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <variant>
+#include <vector>
+
+namespace fp::sim {
+
+/// All tunable parameters of the simulation core. Plain values; the table below gives their meaning and ranges.
+struct SimParams {
+  // fluid
+  double particleRadius = 0.025;  ///< radius r of the finest particles [m]; spacing is 2r, support 4r
+  double restDensity = 1000.0;    ///< rest density rho0 [kg/m^3]
+  std::array<double, 3> gravity{0.0, -9.81, 0.0};  ///< gravitational acceleration [m/s^2]
+  double viscosity = 0.01;          ///< fluid viscosity coefficient (Monaghan/Morris standard form) [m^2/s]
+  double boundaryViscosity = 0.0;   ///< viscosity against boundaries (friction) [m^2/s]
+  double surfaceTension = 0.0;      ///< Akinci 2013 cohesion + curvature coefficient, 0 = off [-]
+  // time stepping
+  double cflFactor = 0.4;  ///< CFL number: dt = cfl * 2r / v_max [-]
+  double dtMax = 0.005;    ///< largest time step [s]
+  double dtMin = 1e-5;     ///< smallest time step [s]
+  // pressure solver (DFSPH)
+  double densityTolerance = 0.1;     ///< allowed mean density error [% of rho0]
+  double divergenceTolerance = 0.1;  ///< allowed mean divergence error [% of rho0 per second * dt]
+  int minIterations = 2;             ///< least solver iterations per solve
+  int maxIterations = 100;           ///< most solver iterations per solve
+  bool divergenceSolve = true;       ///< run the divergence-free solve
+  bool warmStart = true;             ///< warm-start both solves with the previous step's stiffness
+  // robustness
+  double maxSpeed = 50.0;  ///< a fluid particle faster than this is reported as an instability [m/s]
+  std::uint64_t seed = 1;  ///< seed of every random choice (sampling jitter, split orientations) [-]
+};
+
+/// Kind of value a parameter holds.
+enum class ParamKind { Real, Int, Bool, Vec3, Seed };
+
+/// Declaration of one parameter.
+struct ParamInfo {
+  std::string key;          ///< scene-file key, snake_case
+  std::string group;        ///< panel group
+  std::string unit;         ///< SI unit or "-"
+  ParamKind kind;           ///< value kind
+  double min;               ///< smallest allowed value (each component for Vec3)
+  double max;               ///< largest allowed value (each component for Vec3)
+  std::string description;  ///< one line
+  bool live;                ///< may change while the simulation runs
+  std::variant<double SimParams::*, int SimParams::*, bool SimParams::*, std::array<double, 3> SimParams::*,
+               std::uint64_t SimParams::*>
+      member;  ///< where the value lives
+};
+
+/// The table of all simulation parameters, immutable.
+class ParamTable {
+ public:
+  /// the simulation's table
+  static const ParamTable& sim();
+
+  /// every parameter, in panel order
+  const std::vector<ParamInfo>& entries() const { return m_entries; }
+  /// the declaration named `key`, or nullptr
+  const ParamInfo* find(std::string_view key) const;
+
+  /// value of a scalar parameter (Real, Int, Bool, Seed) as double
+  static double getScalar(const SimParams& p, const ParamInfo& info);
+  /// value of a Vec3 parameter
+  static std::array<double, 3> getVec3(const SimParams& p, const ParamInfo& info);
+  /// sets a scalar parameter; returns an error message (empty on success) when out of range or not integral
+  static std::string setScalar(SimParams& p, const ParamInfo& info, double value);
+  /// sets a Vec3 parameter; returns an error message (empty on success) when a component is out of range
+  static std::string setVec3(SimParams& p, const ParamInfo& info, const std::array<double, 3>& value);
+
+  /// checks relations between parameters (e.g. dt_min <= dt_max); returns an error message or empty
+  static std::string validate(const SimParams& p);
+
+ private:
+  ParamTable();
+  std::vector<ParamInfo> m_entries;
+};
+
+}  // namespace fp::sim
