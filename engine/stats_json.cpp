@@ -1,1 +1,47 @@
-// placeholder: being written
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "engine/headless_runner.h"
+
+namespace fp::engine {
+
+void writeStatsJson(const std::string& path, const RunSummary& s) {
+  nlohmann::ordered_json j;
+  j["scene"] = s.scene;
+  j["status"] = s.status;
+  if (!s.message.empty())
+    j["message"] = s.message;
+  j["threads"] = s.threads;
+  j["seed"] = s.seed;
+  j["particles_mean"] = s.particlesMean;
+  j["particles_max"] = s.particlesMax;
+  j["particles_final"] = s.particlesFinal;
+  j["boundary_particles"] = s.boundaryParticles;
+  j["steps"] = s.steps;
+  j["frames"] = s.frames;
+  j["sim_seconds"] = s.simSeconds;
+  j["wall_seconds"] = s.wallSeconds;
+  j["us_per_particle_step"] = s.usPerParticleStep;
+  j["density_error_mean"] = s.densityErrorMean;
+  j["density_error_max"] = s.densityErrorMax;
+  j["density_iterations_mean"] = s.densityIterationsMean;
+  j["divergence_iterations_mean"] = s.divergenceIterationsMean;
+  j["neighbors_mean"] = s.neighborsMean;
+  j["mass_initial"] = s.massInitial;
+  j["mass_final"] = s.massFinal;
+  j["mass_drift"] = s.massInitial > 0 ? (s.massFinal - s.massInitial) / s.massInitial : 0.0;
+  j["momentum_final"] = {s.momentumFinal.x(), s.momentumFinal.y(), s.momentumFinal.z()};
+  j["memory_bytes"] = s.memoryBytes;
+  j["phase_seconds"] = {{"neighbors", s.phases.neighbors},   {"density", s.phases.density},
+                        {"divergence", s.phases.divergence}, {"viscosity", s.phases.viscosity},
+                        {"pressure", s.phases.pressure},     {"boundaries", s.phases.boundaries},
+                        {"integrate", s.phases.integrate}};
+  std::ofstream file(path);
+  if (!file)
+    throw sim::InputError(path + ": cannot open stats file for writing");
+  file << j.dump(2) << "\n";
+  if (!file)
+    throw sim::InputError(path + ": write failed");
+}
+
+}  // namespace fp::engine

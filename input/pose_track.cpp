@@ -1,1 +1,245 @@
-// placeholder: being written
+#include "input/pose_track.h"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <string_view>
+#include <system_error>
+
+namespace fp::input {
+
+namespace {
+
+constexpr const char* kHeader = "time,px,py,pz,qw,qx,qy,qz,grip";
+constexpr int kColumns = 9;
+
+/// Shortest decimal text that parses back to exactly `value`, independent of the C locale (unlike printf,
+/// whose decimal separator follows LC_NUMERIC).
+std::string formatExact(double value) {
+  char buffer[64];
+  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
+  return std::string(buffer, result.ptr);
+}
+
+std::string_view trim(std::string_view s) {
+  const auto isSpace = [](char c) { return c == ' ' || c == '\t' || c == '\r'; };
+  while (!s.empty() && isSpace(s.front())) {
+    s.remove_prefix(1);
+  }
+  while (!s.empty() && isSpace(s.back())) {
+    s.remove_suffix(1);
+  }
+  return s;
+}
+
+/// Parses one whole field as a double; from_chars is locale independent and exact, which save() relies on.
+bool parseDouble(std::string_view field, double& value) {
+  field = trim(field);
+  if (!field.empty() && field.front() == '+') {
+    field.remove_prefix(1);  // from_chars rejects an explicit plus sign that spreadsheets sometimes write
+  }
+  if (field.empty()) {
+    return false;
+  }
+  const auto result = std::from_chars(field.data(), field.data() + field.size(), value);
+  return result.ec == std::errc() && result.ptr == field.data() + field.size();
+}
+
+std::vector<std::string_view> splitCommas(std::string_view line) {
+  std::vector<std::string_view> fields;
+  size_t start = 0;
+  while (true) {
+    const size_t comma = line.find(',', start);
+    if (comma == std::string_view::npos) {
+      fields.push_back(line.substr(start));
+      return fields;
+    }
+    fields.push_back(line.substr(start, comma - start));
+    start = comma + 1;
+  }
+}
+
+/// World-frame rotation vector (axis * angle) of the shortest rotation taking q0 to q1.
+sim::Vec3d rotationVector(const sim::Quatd& q0, const sim::Quatd& q1) {
+  sim::Quatd dq = q1 * q0.conjugate();
+  // q and -q are the same rotation; w >= 0 picks the representative with angle <= pi (shortest path).
+  if (dq.w() < 0.0) {
+    dq.coeffs() = -dq.coeffs();
+  }
+  const double s = dq.vec().norm();
+  if (s == 0.0) {
+    return sim::Vec3d::Zero();
+  }
+  // atan2 stays accurate for small angles, where acos(w) loses half the digits.
+  const double angle = 2.0 * std::atan2(s, dq.w());
+  return dq.vec() * (angle / s);
+}
+
+}  // namespace
+
+void PoseTrack::add(const PoseSample& key) {
+  if (!std::isfinite(key.time)) {
+    throw sim::InputError("pose key: time is not finite");
+  }
+  if (!key.position.allFinite()) {
+    throw sim::InputError("pose key at t=" + formatExact(key.time) + ": position is not finite");
+  }
+  if (!key.orientation.coeffs().allFinite()) {
+    throw sim::InputError("pose key at t=" + formatExact(key.time) + ": orientation is not finite");
+  }
+  if (!std::isfinite(key.grip)) {
+    throw sim::InputError("pose key at t=" + formatExact(key.time) + ": grip is not finite");
+  }
+  if (!m_keys.empty() && !(key.time > m_keys.back().time)) {
+    throw sim::InputError("pose key at t=" + formatExact(key.time) +
+                          ": time is not after the previous key (t=" + formatExact(m_keys.back().time) + ")");
+  }
+  const double norm = key.orientation.norm();
+  if (norm < 1e-9) {
+    throw sim::InputError("pose key at t=" + formatExact(key.time) + ": orientation quaternion is zero");
+  }
+
+  PoseSample stored;
+  stored.time = key.time;
+  stored.position = key.position;
+  stored.grip = key.grip;
+  stored.orientation = key.orientation;
+  // Renormalise only when visibly off: dividing an already unit quaternion by its norm can move the last bit,
+  // which would break the exact save/load round trip.
+  if (std::abs(norm - 1.0) > 1e-12) {
+    stored.orientation.coeffs() /= norm;
+  }
+  // Keys carry poses only; velocities are derived per segment by sample().
+  m_keys.push_back(stored);
+}
+
+double PoseTrack::duration() const {
+  return m_keys.empty() ? 0.0 : m_keys.back().time;
+}
+
+PoseSample PoseTrack::sample(double t) const {
+  PoseSample out;
+  out.time = t;
+  if (m_keys.empty()) {
+    return out;
+  }
+  const PoseSample& first = m_keys.front();
+  const PoseSample& last = m_keys.back();
+  // Before the track, with a single key, or for NaN (which fails every comparison): the first pose, at rest.
+  if (m_keys.size() < 2 || !(t >= first.time)) {
+    out.position = first.position;
+    out.orientation = first.orientation;
+    out.grip = first.grip;
+    return out;
+  }
+  if (t > last.time) {  // after the track: the last pose, at rest
+    out.position = last.position;
+    out.orientation = last.orientation;
+    out.grip = last.grip;
+    return out;
+  }
+
+  // Segment [i, i+1] with key(i).time <= t < key(i+1).time; t == last time belongs to the final segment.
+  const auto upper = std::upper_bound(m_keys.begin(), m_keys.end(), t,
+                                      [](double value, const PoseSample& key) { return value < key.time; });
+  const size_t i1 = std::min(static_cast<size_t>(upper - m_keys.begin()), m_keys.size() - 1);
+  const size_t i0 = i1 - 1;
+  const PoseSample& k0 = m_keys[i0];
+  const PoseSample& k1 = m_keys[i1];
+  const double dt = k1.time - k0.time;
+  const double a = (t - k0.time) / dt;
+
+  // (1-a)*x0 + a*x1 rather than x0 + a*(x1-x0): both ends are then reproduced exactly.
+  out.position = (1.0 - a) * k0.position + a * k1.position;
+  out.grip = (1.0 - a) * k0.grip + a * k1.grip;
+  if (t == k1.time) {
+    out.orientation = k1.orientation;  // exact key, and not its negated twin that slerp may return
+  } else {
+    out.orientation = k0.orientation.slerp(a, k1.orientation);  // Eigen's slerp follows the shortest arc
+  }
+  out.linearVelocity = (k1.position - k0.position) / dt;
+  out.angularVelocity = rotationVector(k0.orientation, k1.orientation) / dt;
+  return out;
+}
+
+PoseTrack PoseTrack::load(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) {
+    throw sim::InputError(path + ": cannot open pose track for reading");
+  }
+  PoseTrack track;
+  std::string raw;
+  int lineNumber = 0;
+  bool headerSeen = false;
+  while (std::getline(in, raw)) {
+    ++lineNumber;
+    const std::string_view line = trim(raw);
+    const std::string where = path + ":" + std::to_string(lineNumber) + ": ";
+    if (!headerSeen) {
+      if (line != kHeader) {
+        throw sim::InputError(where + "expected header \"" + kHeader + "\"");
+      }
+      headerSeen = true;
+      continue;
+    }
+    if (line.empty()) {
+      continue;  // tolerate blank lines, e.g. a trailing one added by an editor
+    }
+    const std::vector<std::string_view> fields = splitCommas(line);
+    if (static_cast<int>(fields.size()) != kColumns) {
+      throw sim::InputError(where + "expected " + std::to_string(kColumns) + " columns, found " +
+                            std::to_string(fields.size()));
+    }
+    double v[kColumns];
+    for (int c = 0; c < kColumns; ++c) {
+      if (!parseDouble(fields[c], v[c])) {
+        throw sim::InputError(where + "column " + std::to_string(c + 1) + ": bad number \"" +
+                              std::string(trim(fields[c])) + "\"");
+      }
+    }
+    PoseSample key;
+    key.time = v[0];
+    key.position = sim::Vec3d(v[1], v[2], v[3]);
+    key.orientation = sim::Quatd(v[4], v[5], v[6], v[7]);  // Eigen's constructor order is w, x, y, z
+    key.grip = v[8];
+    try {
+      track.add(key);
+    } catch (const sim::InputError& e) {
+      throw sim::InputError(where + e.what());
+    }
+  }
+  if (!headerSeen) {
+    throw sim::InputError(path + ":1: empty file, expected header \"" + kHeader + "\"");
+  }
+  return track;
+}
+
+void PoseTrack::save(const std::string& path) const {
+  std::ofstream out(path, std::ios::trunc);
+  if (!out) {
+    throw sim::InputError(path + ": cannot open pose track for writing");
+  }
+  out << kHeader << '\n';
+  for (const PoseSample& k : m_keys) {
+    const double values[kColumns] = {k.time,
+                                     k.position.x(),
+                                     k.position.y(),
+                                     k.position.z(),
+                                     k.orientation.w(),
+                                     k.orientation.x(),
+                                     k.orientation.y(),
+                                     k.orientation.z(),
+                                     k.grip};
+    for (int c = 0; c < kColumns; ++c) {
+      out << (c == 0 ? "" : ",") << formatExact(values[c]);
+    }
+    out << '\n';
+  }
+  out.close();
+  if (out.fail()) {
+    throw sim::InputError(path + ": write failed");
+  }
+}
+
+}  // namespace fp::input

@@ -1,1 +1,55 @@
-// placeholder: being written
+#include "render/camera.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace fp::render {
+
+Mat4 lookAt(const Eigen::Vector3f& eye, const Eigen::Vector3f& target, const Eigen::Vector3f& up) {
+  const Eigen::Vector3f f = (target - eye).normalized();
+  const Eigen::Vector3f s = f.cross(up).normalized();
+  const Eigen::Vector3f u = s.cross(f);
+  Mat4 m = Mat4::Identity();
+  m.block<1, 3>(0, 0) = s.transpose();
+  m.block<1, 3>(1, 0) = u.transpose();
+  m.block<1, 3>(2, 0) = -f.transpose();
+  m(0, 3) = -s.dot(eye);
+  m(1, 3) = -u.dot(eye);
+  m(2, 3) = f.dot(eye);
+  return m;
+}
+
+Mat4 perspective(float fovY, float aspect, float zNear, float zFar) {
+  const float t = 1.0f / std::tan(0.5f * fovY);
+  Mat4 m = Mat4::Zero();
+  m(0, 0) = t / aspect;
+  m(1, 1) = t;
+  m(2, 2) = (zFar + zNear) / (zNear - zFar);
+  m(2, 3) = 2.0f * zFar * zNear / (zNear - zFar);
+  m(3, 2) = -1.0f;
+  return m;
+}
+
+Eigen::Vector3f OrbitCamera::eye() const {
+  const Eigen::Vector3f dir(std::cos(pitch) * std::sin(yaw), std::sin(pitch),
+                            std::cos(pitch) * std::cos(yaw));
+  return target + distance * dir;
+}
+
+Mat4 OrbitCamera::view() const {
+  return lookAt(eye(), target, Eigen::Vector3f::UnitY());
+}
+
+Mat4 OrbitCamera::projection(float aspect) const {
+  return perspective(fovY, aspect, std::max(0.01f, 0.05f * distance), 20.0f * distance);
+}
+
+void OrbitCamera::frame(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi, float aspect) {
+  target = 0.5f * (lo + hi);
+  const float radius = 0.5f * (hi - lo).norm();
+  // the bounding sphere must fit the narrower of the two fields of view
+  const float halfFov = 0.5f * std::min(fovY, 2.0f * std::atan(std::tan(0.5f * fovY) * aspect));
+  distance = radius / std::sin(halfFov);
+}
+
+}  // namespace fp::render

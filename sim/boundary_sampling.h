@@ -1,7 +1,7 @@
 #pragma once
-/// Surface sampling of collider shapes into boundary particles (Akinci et al. 2012 use one layer of particles on the
-/// surface), and signed distances to the shapes (inside < 0) so that fluid and split children are never placed in a
-/// wall.
+/// Surface sampling of collider shapes into boundary particles (Akinci et al. 2012 use one layer of particles
+/// on the surface), and signed distances to the shapes (inside < 0) so that fluid and split children are
+/// never placed in a wall.
 
 #include <vector>
 
@@ -11,21 +11,22 @@
 
 namespace fp::sim {
 
-/// Points on the surface of a box centred at the origin, about `spacing` apart, faces, edges and corners covered.
+/// Points on the surface of a box centred at the origin, about `spacing` apart, faces, edges and corners
+/// covered.
 std::vector<Vec3d> sampleBoxSurface(const Vec3d& halfExtents, double spacing);
 /// Points on a sphere centred at the origin, about `spacing` apart (Fibonacci lattice).
 std::vector<Vec3d> sampleSphereSurface(double radius, double spacing);
 /// Points on a capsule along the local y axis (cap centres at y = +-halfLength), about `spacing` apart.
 std::vector<Vec3d> sampleCapsuleSurface(double radius, double halfLength, double spacing);
-/// Points on a triangle mesh surface, about `spacing` apart, every triangle covered, none closer than ~0.5 spacing
-/// to another.
+/// Points on a triangle mesh surface, about `spacing` apart, every triangle covered, none closer than ~0.5
+/// spacing to another.
 std::vector<Vec3d> sampleMeshSurface(const TriangleMesh& mesh, double spacing);
 
 /// Surface samples of a collider in its local frame (container boxes too: their walls are the box faces).
 std::vector<Vec3d> sampleColliderLocal(const ColliderDesc& collider, double spacing);
 
-/// Signed distance from a point in the collider's local frame to its surface: negative inside the solid. For a
-/// container box the solid is the outside, so points inside the box have positive distance.
+/// Signed distance from a point in the collider's local frame to its surface: negative inside the solid. For
+/// a container box the solid is the outside, so points inside the box have positive distance.
 double signedDistanceLocal(const ColliderDesc& collider, const Vec3d& localPoint);
 /// Signed distance of a world point to a collider at its initial pose.
 double signedDistance(const ColliderDesc& collider, const Vec3d& worldPoint);

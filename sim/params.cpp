@@ -20,33 +20,38 @@ ParamTable::ParamTable() {
     m_entries.push_back(ParamInfo{std::move(key), std::move(group), std::move(unit), kind, min, max,
                                   std::move(description), live, member});
   };
-  const ParamKind R = ParamKind::Real;
-  const ParamKind I = ParamKind::Int;
-  const ParamKind B = ParamKind::Bool;
-  add("particle_radius", "fluid", "m", R, 1e-3, 0.5, false, "radius of the finest particles (spacing 2r, support 4r)",
-      &P::particleRadius);
+  const ParamKind R = ParamKind::Number;
+  const ParamKind I = ParamKind::Integer;
+  const ParamKind B = ParamKind::Boolean;
+  add("particle_radius", "fluid", "m", R, 1e-3, 0.5, false,
+      "radius of the finest particles (spacing 2r, support 4r)", &P::particleRadius);
   add("rest_density", "fluid", "kg/m^3", R, 100.0, 20000.0, false, "rest density rho0", &P::restDensity);
-  add("gravity", "fluid", "m/s^2", ParamKind::Vec3, -100.0, 100.0, true, "gravitational acceleration", &P::gravity);
+  add("gravity", "fluid", "m/s^2", ParamKind::Vector3, -100.0, 100.0, true, "gravitational acceleration",
+      &P::gravity);
   add("viscosity", "fluid", "m^2/s", R, 0.0, 10.0, true, "viscosity between fluid particles (standard form)",
       &P::viscosity);
-  add("boundary_viscosity", "fluid", "m^2/s", R, 0.0, 10.0, true, "viscosity against boundaries (wall friction)",
-      &P::boundaryViscosity);
+  add("boundary_viscosity", "fluid", "m^2/s", R, 0.0, 10.0, true,
+      "viscosity against boundaries (wall friction)", &P::boundaryViscosity);
   add("surface_tension", "fluid", "-", R, 0.0, 10.0, true, "Akinci 2013 surface tension coefficient, 0 = off",
       &P::surfaceTension);
   add("cfl_factor", "time", "-", R, 0.01, 1.0, true, "CFL number: dt = cfl * 2r / max speed", &P::cflFactor);
   add("dt_max", "time", "s", R, 1e-5, 0.05, true, "largest time step", &P::dtMax);
   add("dt_min", "time", "s", R, 1e-7, 0.01, true, "smallest time step", &P::dtMin);
-  add("density_tolerance", "solver", "%", R, 1e-4, 10.0, true, "allowed mean density error in percent of rho0",
-      &P::densityTolerance);
+  add("density_tolerance", "solver", "%", R, 1e-4, 10.0, true,
+      "allowed mean density error in percent of rho0", &P::densityTolerance);
   add("divergence_tolerance", "solver", "%", R, 1e-4, 10.0, true,
       "allowed mean divergence error in percent of rho0 per time step", &P::divergenceTolerance);
-  add("min_iterations", "solver", "-", I, 1, 100, true, "least pressure iterations per solve", &P::minIterations);
-  add("max_iterations", "solver", "-", I, 1, 1000, true, "most pressure iterations per solve", &P::maxIterations);
+  add("min_iterations", "solver", "-", I, 1, 100, true, "least pressure iterations per solve",
+      &P::minIterations);
+  add("max_iterations", "solver", "-", I, 1, 1000, true, "most pressure iterations per solve",
+      &P::maxIterations);
   add("divergence_solve", "solver", "-", B, 0, 1, true, "run the divergence-free solve", &P::divergenceSolve);
-  add("warm_start", "solver", "-", B, 0, 1, true, "warm-start solves with the previous stiffness", &P::warmStart);
-  add("max_speed", "robustness", "m/s", R, 0.1, 1000.0, true, "speed above which the run is reported unstable",
-      &P::maxSpeed);
-  add("seed", "robustness", "-", ParamKind::Seed, 0, 4294967295.0, false, "seed of every random choice", &P::seed);
+  add("warm_start", "solver", "-", B, 0, 1, true, "warm-start solves with the previous stiffness",
+      &P::warmStart);
+  add("max_speed", "robustness", "m/s", R, 0.1, 1000.0, true,
+      "speed above which the run is reported unstable", &P::maxSpeed);
+  add("seed", "robustness", "-", ParamKind::Seed, 0, 4294967295.0, false, "seed of every random choice",
+      &P::seed);
 }
 
 const ParamTable& ParamTable::sim() {
@@ -56,7 +61,8 @@ const ParamTable& ParamTable::sim() {
 
 const ParamInfo* ParamTable::find(std::string_view key) const {
   for (const ParamInfo& e : m_entries) {
-    if (e.key == key) return &e;
+    if (e.key == key)
+      return &e;
   }
   return nullptr;
 }
@@ -75,25 +81,29 @@ double ParamTable::getScalar(const SimParams& p, const ParamInfo& info) {
 }
 
 std::array<double, 3> ParamTable::getVec3(const SimParams& p, const ParamInfo& info) {
-  if (auto m = std::get_if<std::array<double, 3> SimParams::*>(&info.member)) return p.**m;
+  if (auto m = std::get_if<std::array<double, 3> SimParams::*>(&info.member))
+    return p.**m;
   return {0.0, 0.0, 0.0};
 }
 
 std::string ParamTable::setScalar(SimParams& p, const ParamInfo& info, double value) {
-  if (info.kind == ParamKind::Vec3) return info.key + " is a 3-vector";
-  if (!std::isfinite(value)) return info.key + " must be a finite number";
+  if (info.kind == ParamKind::Vector3)
+    return info.key + " is a 3-vector";
+  if (!std::isfinite(value))
+    return info.key + " must be a finite number";
   if (value < info.min || value > info.max) {
     std::ostringstream s;
     s << info.key << " = " << value << " is out of range " << formatRange(info);
     return s.str();
   }
-  if ((info.kind == ParamKind::Int || info.kind == ParamKind::Seed) && value != std::floor(value)) {
+  if ((info.kind == ParamKind::Integer || info.kind == ParamKind::Seed) && value != std::floor(value)) {
     return info.key + " must be an integer";
   }
   std::visit(
       [&](auto member) {
         using M = std::decay_t<decltype(p.*member)>;
-        if constexpr (!std::is_same_v<M, std::array<double, 3>>) p.*member = static_cast<M>(value);
+        if constexpr (!std::is_same_v<M, std::array<double, 3>>)
+          p.*member = static_cast<M>(value);
       },
       info.member);
   return {};
@@ -101,19 +111,22 @@ std::string ParamTable::setScalar(SimParams& p, const ParamInfo& info, double va
 
 std::string ParamTable::setVec3(SimParams& p, const ParamInfo& info, const std::array<double, 3>& value) {
   auto m = std::get_if<std::array<double, 3> SimParams::*>(&info.member);
-  if (!m) return info.key + " is not a 3-vector";
+  if (!m)
+    return info.key + " is not a 3-vector";
   for (double c : value) {
     if (!std::isfinite(c) || c < info.min || c > info.max) {
       return info.key + " has a component out of range " + formatRange(info);
     }
   }
-  p.**m = value;
+  p.** m = value;
   return {};
 }
 
 std::string ParamTable::validate(const SimParams& p) {
-  if (p.dtMin > p.dtMax) return "dt_min must not exceed dt_max";
-  if (p.minIterations > p.maxIterations) return "min_iterations must not exceed max_iterations";
+  if (p.dtMin > p.dtMax)
+    return "dt_min must not exceed dt_max";
+  if (p.minIterations > p.maxIterations)
+    return "min_iterations must not exceed max_iterations";
   return {};
 }
 

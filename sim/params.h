@@ -12,15 +12,16 @@
 
 namespace fp::sim {
 
-/// All tunable parameters of the simulation core. Plain values; the table below gives their meaning and ranges.
+/// All tunable parameters of the simulation core. Plain values; the table below gives their meaning and
+/// ranges.
 struct SimParams {
   // fluid
   double particleRadius = 0.025;  ///< radius r of the finest particles [m]; spacing is 2r, support 4r
   double restDensity = 1000.0;    ///< rest density rho0 [kg/m^3]
   std::array<double, 3> gravity{0.0, -9.81, 0.0};  ///< gravitational acceleration [m/s^2]
-  double viscosity = 0.01;          ///< fluid viscosity coefficient (Monaghan/Morris standard form) [m^2/s]
-  double boundaryViscosity = 0.0;   ///< viscosity against boundaries (friction) [m^2/s]
-  double surfaceTension = 0.0;      ///< Akinci 2013 cohesion + curvature coefficient, 0 = off [-]
+  double viscosity = 0.01;         ///< fluid viscosity coefficient (Monaghan/Morris standard form) [m^2/s]
+  double boundaryViscosity = 0.0;  ///< viscosity against boundaries (friction) [m^2/s]
+  double surfaceTension = 0.0;     ///< Akinci 2013 cohesion + curvature coefficient, 0 = off [-]
   // time stepping
   double cflFactor = 0.4;  ///< CFL number: dt = cfl * 2r / v_max [-]
   double dtMax = 0.005;    ///< largest time step [s]
@@ -38,7 +39,7 @@ struct SimParams {
 };
 
 /// Kind of value a parameter holds.
-enum class ParamKind { Real, Int, Bool, Vec3, Seed };
+enum class ParamKind { Number, Integer, Boolean, Vector3, Seed };
 
 /// Declaration of one parameter.
 struct ParamInfo {
@@ -66,13 +67,13 @@ class ParamTable {
   /// the declaration named `key`, or nullptr
   const ParamInfo* find(std::string_view key) const;
 
-  /// value of a scalar parameter (Real, Int, Bool, Seed) as double
+  /// value of a scalar parameter (Number, Integer, Boolean, Seed) as double
   static double getScalar(const SimParams& p, const ParamInfo& info);
-  /// value of a Vec3 parameter
+  /// value of a Vector3 parameter
   static std::array<double, 3> getVec3(const SimParams& p, const ParamInfo& info);
   /// sets a scalar parameter; returns an error message (empty on success) when out of range or not integral
   static std::string setScalar(SimParams& p, const ParamInfo& info, double value);
-  /// sets a Vec3 parameter; returns an error message (empty on success) when a component is out of range
+  /// sets a Vector3 parameter; returns an error message (empty on success) when a component is out of range
   static std::string setVec3(SimParams& p, const ParamInfo& info, const std::array<double, 3>& value);
 
   /// checks relations between parameters (e.g. dt_min <= dt_max); returns an error message or empty

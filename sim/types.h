@@ -19,8 +19,8 @@ using Aabb = Eigen::AlignedBox3d;
 
 constexpr double kPi = 3.14159265358979323846;
 
-/// Error raised when the simulation goes unstable (NaN, runaway speed, particle outside the domain). The message
-/// names the step and the particle.
+/// Error raised when the simulation goes unstable (NaN, runaway speed, particle outside the domain). The
+/// message names the step and the particle.
 class InstabilityError : public std::runtime_error {
  public:
   explicit InstabilityError(const std::string& what) : std::runtime_error(what) {}

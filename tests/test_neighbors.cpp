@@ -1,1 +1,170 @@
-// placeholder: being written
+// The grid neighbour search equals brute force on random clouds with mixed particle sizes.
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <algorithm>
+#include <random>
+#include <set>
+
+#include "sim/kernels.h"
+#include "sim/neighbor_search.h"
+#include "sim/particle_set.h"
+
+using namespace fp::sim;
+
+namespace {
+
+struct Cloud {
+  std::vector<Vec3> x;
+  std::vector<Real> H;
+};
+
+Cloud randomCloud(std::size_t n, Real hFine, double coarseShare, unsigned seed, const Aabb& box) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  Cloud c;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3d p = box.min() + box.sizes().cwiseProduct(Vec3d(u(rng), u(rng), u(rng)));
+    c.x.push_back(p.cast<Real>());
+    c.H.push_back(u(rng) < coarseShare ? Real(3) * hFine : hFine);
+  }
+  return c;
+}
+
+std::set<std::uint32_t> listOf(const NeighborList& l, std::size_t i) {
+  return std::set<std::uint32_t>(l.indices.begin() + l.offsets[i], l.indices.begin() + l.offsets[i + 1]);
+}
+
+}  // namespace
+
+TEST(NeighborSearchTest, EqualsBruteForceWithMixedSizes) {
+  const Aabb box(Vec3d(-0.3, 0.0, -0.2), Vec3d(0.4, 0.5, 0.2));
+  const Real hFine = 0.04f;
+  Cloud c = randomCloud(3000, hFine, 0.3, 11, box);
+  UniformGrid grid;
+  grid.setup(box, hFine);
+  std::vector<std::uint32_t> order, cellStart;
+  grid.sort(c.x.data(), c.x.size(), order, cellStart);
+  // sort the cloud as the simulation does
+  std::vector<Vec3> xs(c.x.size());
+  std::vector<Real> Hs(c.x.size());
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    xs[k] = c.x[order[k]];
+    Hs[k] = c.H[order[k]];
+  }
+  const Real maxH = *std::max_element(Hs.begin(), Hs.end());
+  NeighborSearch search;
+  NeighborList list;
+  GridPoints src{xs.data(), Hs.data(), 0, &cellStart, 0};
+  search.build(grid, xs, Hs, {src}, 0, maxH, list);
+
+  std::size_t pairs = 0, mixedPairs = 0;
+  for (std::size_t i = 0; i < xs.size(); ++i) {
+    std::set<std::uint32_t> expected;
+    for (std::size_t j = 0; j < xs.size(); ++j) {
+      const Real h = pairSupport(Hs[i], Hs[j]);
+      if (j != i && (xs[i] - xs[j]).squaredNorm() < h * h) {
+        expected.insert(std::uint32_t(j));
+        if (Hs[i] != Hs[j])
+          ++mixedPairs;
+      }
+    }
+    pairs += expected.size();
+    ASSERT_EQ(listOf(list, i), expected) << "particle " << i;
+    ASSERT_EQ(list.count(i), expected.size()) << "duplicates in the list of particle " << i;
+  }
+  EXPECT_GT(pairs, 3000u * 5);
+  EXPECT_GT(mixedPairs, 1000u);
+}
+
+TEST(NeighborSearchTest, FindsBoundaryNeighborsAcrossTwoSources) {
+  const Aabb box(Vec3d(0, 0, 0), Vec3d(0.5, 0.5, 0.5));
+  const Real h = 0.05f;
+  Cloud fluid = randomCloud(1000, h, 0.2, 3, box);
+  Cloud wallA = randomCloud(700, h, 0.0, 4, box);
+  Cloud wallB = randomCloud(500, h, 0.0, 5, box);
+  UniformGrid grid;
+  grid.setup(box, h);
+  std::vector<std::uint32_t> order, cellsA, cellsB, cellsF;
+  auto sortCloud = [&](Cloud& c, std::vector<std::uint32_t>& cells) {
+    grid.sort(c.x.data(), c.x.size(), order, cells);
+    Cloud s = c;
+    for (std::size_t k = 0; k < order.size(); ++k) {
+      s.x[k] = c.x[order[k]];
+      s.H[k] = c.H[order[k]];
+    }
+    c = s;
+  };
+  sortCloud(fluid, cellsF);
+  sortCloud(wallA, cellsA);
+  sortCloud(wallB, cellsB);
+  // walls concatenated: B's indices come after A's
+  GridPoints a{wallA.x.data(), nullptr, h, &cellsA, 0};
+  GridPoints b{wallB.x.data(), nullptr, h, &cellsB, std::uint32_t(wallA.x.size())};
+  NeighborSearch search;
+  NeighborList list;
+  search.build(grid, fluid.x, fluid.H, {a, b}, -1, 3 * h, list);
+  std::vector<Vec3> walls = wallA.x;
+  walls.insert(walls.end(), wallB.x.begin(), wallB.x.end());
+  for (std::size_t i = 0; i < fluid.x.size(); ++i) {
+    std::set<std::uint32_t> expected;
+    for (std::size_t j = 0; j < walls.size(); ++j) {
+      const Real hij = pairSupport(fluid.H[i], h);
+      if ((fluid.x[i] - walls[j]).squaredNorm() < hij * hij)
+        expected.insert(std::uint32_t(j));
+    }
+    ASSERT_EQ(listOf(list, i), expected) << "particle " << i;
+  }
+}
+
+TEST(NeighborSearchTest, ListsAreIdenticalForOneAndTwoThreads) {
+  const Aabb box(Vec3d(0, 0, 0), Vec3d(0.6, 0.3, 0.3));
+  Cloud c = randomCloud(5000, 0.03f, 0.25, 9, box);
+  UniformGrid grid;
+  grid.setup(box, 0.03f);
+  std::vector<std::uint32_t> order, cells;
+  grid.sort(c.x.data(), c.x.size(), order, cells);
+  GridPoints src{c.x.data(), c.H.data(), 0, &cells, 0};
+  NeighborList one, two;
+  {
+    tbb::global_control gc(tbb::global_control::max_allowed_parallelism, 1);
+    NeighborSearch s;
+    s.build(grid, c.x, c.H, {src}, -1, 0.09f, one);
+  }
+  {
+    tbb::global_control gc(tbb::global_control::max_allowed_parallelism, 2);
+    NeighborSearch s;
+    s.build(grid, c.x, c.H, {src}, -1, 0.09f, two);
+  }
+  EXPECT_EQ(one.offsets, two.offsets);
+  EXPECT_EQ(one.indices, two.indices);
+}
+
+TEST(NeighborSearchTest, CountingSortIsStableAndComplete) {
+  const Aabb box(Vec3d(0, 0, 0), Vec3d(1, 1, 1));
+  Cloud c = randomCloud(2000, 0.1f, 0.0, 1, box);
+  UniformGrid grid;
+  grid.setup(box, 0.1f);
+  std::vector<std::uint32_t> order, cells;
+  grid.sort(c.x.data(), c.x.size(), order, cells);
+  std::vector<std::uint32_t> sorted = order;
+  std::sort(sorted.begin(), sorted.end());
+  for (std::uint32_t k = 0; k < sorted.size(); ++k) {
+    ASSERT_EQ(sorted[k], k);
+  }
+  EXPECT_EQ(cells.back(), 2000u);
+  for (std::size_t cell = 0; cell + 1 < cells.size(); ++cell) {
+    for (std::uint32_t k = cells[cell]; k < cells[cell + 1]; ++k) {
+      const Eigen::Vector3i cc = grid.cellCoord(c.x[order[k]]);
+      ASSERT_EQ(grid.linear(cc.x(), cc.y(), cc.z()), cell);
+      if (k > cells[cell]) {
+        ASSERT_LT(order[k - 1], order[k]);  // stable
+      }
+    }
+  }
+}
+
+TEST(NeighborSearchTest, RejectsAGridThatIsTooLarge) {
+  UniformGrid grid;
+  EXPECT_THROW(grid.setup(Aabb(Vec3d(0, 0, 0), Vec3d(100, 100, 100)), 0.001f), InputError);
+}

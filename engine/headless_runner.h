@@ -1,0 +1,51 @@
+#pragma once
+/// The headless mode: runs a scene with no display and no GL, shows progress, prints a closing summary, and
+/// optionally writes statistics as JSON and particles per frame as PLY.
+
+#include <ostream>
+#include <string>
+
+#include "engine/cli.h"
+#include "sim/simulation.h"
+
+namespace fp::engine {
+
+/// What a run measured; written to the stats JSON under the names in the comments.
+struct RunSummary {
+  std::string scene;                    ///< "scene"
+  std::string status = "ok";            ///< "status": ok | unstable
+  std::string message;                  ///< "message": the instability report, if any
+  int threads = 0;                      ///< "threads"
+  std::uint64_t seed = 0;               ///< "seed"
+  double particlesMean = 0;             ///< "particles_mean"
+  std::size_t particlesMax = 0;         ///< "particles_max"
+  std::size_t particlesFinal = 0;       ///< "particles_final"
+  std::size_t boundaryParticles = 0;    ///< "boundary_particles"
+  std::uint64_t steps = 0;              ///< "steps"
+  int frames = 0;                       ///< "frames"
+  double simSeconds = 0;                ///< "sim_seconds"
+  double wallSeconds = 0;               ///< "wall_seconds"
+  double usPerParticleStep = 0;         ///< "us_per_particle_step"
+  double densityErrorMean = 0;          ///< "density_error_mean": mean over steps of the mean compression [-]
+  double densityErrorMax = 0;           ///< "density_error_max": largest per-step mean compression [-]
+  double densityIterationsMean = 0;     ///< "density_iterations_mean"
+  double divergenceIterationsMean = 0;  ///< "divergence_iterations_mean"
+  double neighborsMean = 0;             ///< "neighbors_mean": fluid + boundary neighbours per particle
+  double massInitial = 0;               ///< "mass_initial" [kg]
+  double massFinal = 0;                 ///< "mass_final" [kg]
+  sim::Vec3d momentumFinal{0, 0, 0};    ///< "momentum_final" [kg m/s]
+  std::size_t memoryBytes = 0;          ///< "memory_bytes"
+  sim::PhaseTimes phases;               ///< "phase_seconds"
+};
+
+/// Runs the scene of `options` headless. Throws sim::InputError for a bad scene or unwritable output; an
+/// instability ends the run and is reported in the summary (status "unstable").
+RunSummary runHeadless(const CliOptions& options, std::ostream& out, std::ostream& progress);
+
+/// Writes a summary as JSON; throws sim::InputError when the file cannot be written.
+void writeStatsJson(const std::string& path, const RunSummary& summary);
+
+/// Prints the closing summary, one figure a line.
+void printSummary(std::ostream& out, const RunSummary& summary);
+
+}  // namespace fp::engine

@@ -1,0 +1,36 @@
+#pragma once
+/// An orbit camera that produces the view and projection matrices of one view; the desktop window, each VR
+/// eye and the headless mode all hand such a pair to the renderer.
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+namespace fp::render {
+
+/// Column-major 4x4 matrices, as OpenGL expects.
+using Mat4 = Eigen::Matrix4f;
+
+/// Right-handed look-at view matrix (camera looks down -z).
+Mat4 lookAt(const Eigen::Vector3f& eye, const Eigen::Vector3f& target, const Eigen::Vector3f& up);
+/// OpenGL perspective projection; fovY in radians, clip depths in [-1, 1].
+Mat4 perspective(float fovY, float aspect, float zNear, float zFar);
+
+/// A camera orbiting a target: yaw and pitch in radians, distance in metres.
+struct OrbitCamera {
+  Eigen::Vector3f target{0.0f, 0.0f, 0.0f};  ///< point looked at [m]
+  float yaw = 0.6f;                          ///< rotation about +y [rad]
+  float pitch = 0.35f;                       ///< elevation above the xz plane [rad], |pitch| < pi/2
+  float distance = 3.0f;                     ///< from target [m], > 0
+  float fovY = 0.8f;                         ///< vertical field of view [rad]
+
+  /// eye position [m]
+  Eigen::Vector3f eye() const;
+  /// view matrix
+  Mat4 view() const;
+  /// projection matrix for an aspect ratio width/height, near and far planes fitted to the distance
+  Mat4 projection(float aspect) const;
+  /// places the camera so that the box [lo, hi] fills the view at the current yaw and pitch
+  void frame(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi, float aspect);
+};
+
+}  // namespace fp::render

@@ -1,0 +1,56 @@
+#pragma once
+/// Boundary particles of Akinci et al. 2012 ("Versatile rigid-fluid coupling for incompressible SPH"): one
+/// layer of particles sampled on every collider surface, each with a volume psi_b = 1 / sum_k W(x_b - x_k)
+/// over the particles of its own collider, so that walls sampled unevenly still push back evenly. Static
+/// colliders' particles come first and are sorted into the grid once; kinematic colliders' particles follow
+/// and move with their collider's pose.
+
+#include <cstdint>
+#include <vector>
+
+#include "sim/scene.h"
+#include "sim/types.h"
+
+namespace fp::sim {
+
+/// Current pose and velocity of a collider.
+struct ColliderState {
+  ColliderDesc desc;                      ///< shape and initial pose
+  Vec3d position{0.0, 0.0, 0.0};          ///< current origin [m]
+  Quatd orientation = Quatd::Identity();  ///< current rotation local -> world
+  Vec3d linearVelocity{0.0, 0.0, 0.0};    ///< [m/s]
+  Vec3d angularVelocity{0.0, 0.0, 0.0};   ///< about `position`, world [rad/s]
+  std::size_t particleCount = 0;          ///< boundary particles sampled on it
+};
+
+/// Structure of arrays of the boundary particles.
+class BoundarySet {
+ public:
+  std::vector<Vec3> x;                  ///< world position [m]
+  std::vector<Vec3> v;                  ///< velocity [m/s]
+  std::vector<Real> psi;                ///< Akinci volume [m^3]
+  std::vector<Vec3d> local;             ///< position in the collider frame [m]
+  std::vector<std::uint16_t> collider;  ///< index of the owning collider
+
+  /// Samples every collider with spacing 2r and support 4r, computes the volumes, orders static particles
+  /// first.
+  void build(const std::vector<ColliderState>& colliders, Real particleRadius);
+  /// number of boundary particles
+  std::size_t size() const { return x.size(); }
+  /// particles [0, staticCount()) never move
+  std::size_t staticCount() const { return m_staticCount; }
+  /// support radius of every boundary particle [m]
+  Real support() const { return m_support; }
+  /// moves the kinematic particles to their colliders' current poses and sets their velocities
+  void updateKinematic(const std::vector<ColliderState>& colliders);
+  /// reorders the particles from index `begin` on: new begin + k holds old begin + order[k]
+  void permute(std::size_t begin, const std::vector<std::uint32_t>& order);
+  /// bytes held
+  std::size_t memoryBytes() const;
+
+ private:
+  std::size_t m_staticCount = 0;
+  Real m_support = 0;
+};
+
+}  // namespace fp::sim

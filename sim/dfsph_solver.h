@@ -1,0 +1,71 @@
+#pragma once
+/// Divergence-free SPH (Bender & Koschier 2015, 2017) on multi-mass particles: a divergence-free solve on the
+/// velocities and a constant-density solve on the predicted positions, both warm-started, with Akinci 2012
+/// boundary particles. Written in densities normalised by rho0 and volumes V_j = m_j / rho0, so that the
+/// symmetric pair update dv_i = -dt (k_i + k_j) V_j grad W_ij conserves momentum exactly (m_i V_j = m_j V_i).
+
+#include <vector>
+
+#include "sim/boundary_set.h"
+#include "sim/neighbor_search.h"
+#include "sim/params.h"
+#include "sim/particle_set.h"
+
+namespace fp::sim {
+
+/// What one solver needs to see of the simulation state.
+struct SolverContext {
+  ParticleSet& fluid;                ///< fluid particles (positions, velocities, stiffness updated)
+  const BoundarySet& boundary;       ///< boundary particles
+  const NeighborList& fluidNbrs;     ///< fluid neighbours of each fluid particle
+  const NeighborList& boundaryNbrs;  ///< boundary neighbours of each fluid particle
+  const SimParams& params;           ///< parameters
+};
+
+/// Convergence figures of one solve.
+struct SolveResult {
+  int iterations = 0;  ///< iterations run
+  double error =
+      0.0;  ///< final mean error (density: fraction of rho0; divergence: fraction of rho0 per step)
+};
+
+/// The DFSPH pressure solver and the non-pressure forces; owns its scratch arrays.
+class DfsphSolver {
+ public:
+  /// rho_i and the DFSPH factor alpha_i (eq. 11 of Bender & Koschier 2017); returns the mean compression
+  /// max(0, rho/rho0 - 1) over particles
+  double computeDensityAndFactor(SolverContext& ctx);
+  /// divergence-free solve (Algorithm 2 of Bender & Koschier 2017) for step size dt
+  SolveResult divergenceSolve(SolverContext& ctx, Real dt);
+  /// gravity, viscosity (standard form, Monaghan 2005) and surface tension (Akinci 2013) into fluid.a
+  void nonPressureForces(SolverContext& ctx);
+  /// CFL step: cfl * min_i(2 r_i / |v_i + a_i dt|), clamped to [dt_min, dt_max]
+  Real cflTimeStep(const SolverContext& ctx, Real dtPrevious) const;
+  /// constant-density solve (Algorithm 3 of Bender & Koschier 2017) for step size dt
+  SolveResult densitySolve(SolverContext& ctx, Real dt);
+
+  /// momentum given to the fluid by boundary particles since the last reset [kg m/s]
+  const Vec3d& boundaryImpulse() const { return m_boundaryImpulse; }
+  /// sum of m_i times the boundary part of the non-pressure acceleration of the last nonPressureForces [N]
+  const Vec3d& boundaryForce() const { return m_boundaryForce; }
+  /// sets the accumulated boundary impulse to zero
+  void resetBoundaryImpulse() { m_boundaryImpulse.setZero(); }
+  /// bytes held by scratch arrays
+  std::size_t memoryBytes() const;
+
+ private:
+  /// rate of change of the normalised density from the current velocities [1/s]
+  void computeDensityRate(const SolverContext& ctx);
+  /// v_i -= dt * sum_j V_j (k_i + k_j) grad W_ij (+ boundary); adds k to `accumulated`; returns boundary
+  /// impulse
+  Vec3d applyStiffness(SolverContext& ctx, Real dt, std::vector<Real>& accumulated);
+
+  std::vector<Real> m_factor;  // alpha_i [m^2]
+  std::vector<Real> m_rate;    // density rate or predicted density (normalised)
+  std::vector<Real> m_k;       // stiffness of the current iteration [m^2/s^2]
+  std::vector<Vec3> m_normal;  // surface-tension normals [-]
+  Vec3d m_boundaryImpulse = Vec3d::Zero();
+  Vec3d m_boundaryForce = Vec3d::Zero();
+};
+
+}  // namespace fp::sim

@@ -1,0 +1,144 @@
+#pragma once
+/// The simulation: fluid and boundary particles, colliders, neighbour search and the DFSPH step, with
+/// per-phase timing, conservation bookkeeping and instability detection. Driven from a test in a few lines:
+///   fp::sim::Simulation sim(scene); while (sim.time() < 1.0) sim.step();
+
+#include <chrono>
+#include <cstdint>
+#include <vector>
+
+#include "sim/boundary_set.h"
+#include "sim/dfsph_solver.h"
+#include "sim/neighbor_search.h"
+#include "sim/particle_set.h"
+#include "sim/scene.h"
+
+namespace fp::sim {
+
+/// Wall time of the phases of one step [s].
+struct PhaseTimes {
+  double neighbors = 0;   ///< sorting and neighbour lists
+  double density = 0;     ///< densities and DFSPH factors
+  double divergence = 0;  ///< divergence-free solve
+  double viscosity = 0;   ///< non-pressure forces (gravity, viscosity, surface tension)
+  double pressure = 0;    ///< constant-density solve
+  double boundaries = 0;  ///< collider poses and kinematic boundary particles
+  double integrate = 0;   ///< time step, integration and checks
+  /// sum of all phases
+  double total() const {
+    return neighbors + density + divergence + viscosity + pressure + boundaries + integrate;
+  }
+  PhaseTimes& operator+=(const PhaseTimes& o);
+};
+
+/// Figures of one step.
+struct StepStats {
+  double dt = 0;                  ///< step size [s]
+  int densityIterations = 0;      ///< iterations of the constant-density solve
+  int divergenceIterations = 0;   ///< iterations of the divergence-free solve
+  double densityError = 0;        ///< mean compression max(0, rho/rho0 - 1) at the start of the step [-]
+  double solverDensityError = 0;  ///< mean predicted density error left by the solver [-]
+  double fluidNeighbors = 0;      ///< mean fluid neighbours per particle
+  double boundaryNeighbors = 0;   ///< mean boundary neighbours per particle
+  PhaseTimes times;               ///< wall time by phase
+};
+
+/// Figures accumulated over many steps.
+struct RunStats {
+  std::uint64_t steps = 0;                 ///< steps taken
+  std::uint64_t particleSteps = 0;         ///< sum over steps of the particle count
+  std::size_t particlesMax = 0;            ///< largest particle count
+  double simTime = 0;                      ///< simulated time [s]
+  double densityErrorSum = 0;              ///< sum of StepStats::densityError
+  double densityErrorMax = 0;              ///< largest StepStats::densityError
+  std::uint64_t densityIterations = 0;     ///< total density iterations
+  std::uint64_t divergenceIterations = 0;  ///< total divergence iterations
+  double neighborsSum = 0;                 ///< sum of mean (fluid + boundary) neighbours per step
+  PhaseTimes times;                        ///< wall time by phase
+  /// add one step
+  void add(const StepStats& s, std::size_t particles);
+};
+
+/// A running simulation.
+class Simulation {
+ public:
+  /// builds particles and colliders from a scene; throws InputError for an invalid scene
+  explicit Simulation(const SceneDesc& scene);
+
+  /// advances by one CFL step; throws InstabilityError naming the step and particle when the state goes bad
+  void step();
+
+  /// simulated time [s]
+  double time() const { return m_time; }
+  /// steps taken
+  std::uint64_t stepCount() const { return m_stepCount; }
+  /// fluid particles, read-only
+  const ParticleSet& particles() const { return m_fluid; }
+  /// boundary particles, read-only
+  const BoundarySet& boundary() const { return m_boundary; }
+  /// colliders with their current poses
+  const std::vector<ColliderState>& colliders() const { return m_colliders; }
+  /// parameters; the ones marked live in the table may be changed between steps
+  SimParams& params() { return m_params; }
+  /// parameters
+  const SimParams& params() const { return m_params; }
+  /// the scene it was built from
+  const SceneDesc& scene() const { return m_scene; }
+  /// figures of the last step
+  const StepStats& lastStep() const { return m_last; }
+  /// figures since construction or the last resetRunStats()
+  const RunStats& runStats() const { return m_run; }
+  /// restarts the accumulation of runStats()
+  void resetRunStats() { m_run = RunStats{}; }
+  /// momentum given to the fluid by boundaries since construction [kg m/s]
+  const Vec3d& boundaryImpulse() const { return m_boundaryImpulse; }
+  /// fluid neighbours of each fluid particle (valid after a step)
+  const NeighborList& fluidNeighbors() const { return m_fluidNbrs; }
+  /// boundary neighbours of each fluid particle (valid after a step)
+  const NeighborList& boundaryNeighbors() const { return m_boundaryNbrs; }
+
+  /// Sets the pose and velocity of a driven collider for the coming step (the hand). Throws InputError for a
+  /// collider that is not driven.
+  void setColliderPose(std::size_t collider, const Vec3d& position, const Quatd& orientation,
+                       const Vec3d& linearVelocity, const Vec3d& angularVelocity);
+
+  /// total fluid mass [kg]
+  double totalMass() const { return m_fluid.totalMass(); }
+  /// total fluid momentum [kg m/s]
+  Vec3d totalMomentum() const { return m_fluid.totalMomentum(); }
+  /// bytes held by particles, boundaries, grid, neighbour lists and solver scratch
+  std::size_t memoryBytes() const;
+  /// mass of a fluid particle on the initial lattice [kg]
+  Real latticeMass() const { return m_latticeMass; }
+
+ private:
+  void createFluid();
+  void updateColliders();
+  void searchNeighbors();
+  void integrateAndCheck(Real dt);
+
+  SceneDesc m_scene;
+  SimParams m_params;
+  ParticleSet m_fluid;
+  BoundarySet m_boundary;
+  std::vector<ColliderState> m_colliders;
+  UniformGrid m_grid;
+  NeighborSearch m_search;
+  NeighborList m_fluidNbrs;
+  NeighborList m_boundaryNbrs;
+  std::vector<std::uint32_t> m_order;
+  std::vector<std::uint32_t> m_fluidCells;
+  std::vector<std::uint32_t> m_staticCells;
+  std::vector<std::uint32_t> m_kinematicCells;
+  DfsphSolver m_solver;
+  Real m_support = 0;
+  Real m_latticeMass = 0;
+  Real m_dt = 0;
+  double m_time = 0;
+  std::uint64_t m_stepCount = 0;
+  Vec3d m_boundaryImpulse = Vec3d::Zero();
+  StepStats m_last;
+  RunStats m_run;
+};
+
+}  // namespace fp::sim
