@@ -11,7 +11,9 @@ namespace fp::engine {
 /// Loads a scene file. Throws sim::InputError("FILE: $.json.path: what is wrong").
 sim::SceneDesc loadScene(const std::string& path);
 
-/// Parses scene JSON text. `fileName` is used in messages; relative asset paths are resolved against `baseDir`.
-sim::SceneDesc parseScene(const std::string& jsonText, const std::string& fileName, const std::string& baseDir);
+/// Parses scene JSON text. `fileName` is used in messages; relative asset paths are resolved against
+/// `baseDir`.
+sim::SceneDesc parseScene(const std::string& jsonText, const std::string& fileName,
+                          const std::string& baseDir);
 
 }  // namespace fp::engine

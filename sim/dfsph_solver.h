@@ -37,8 +37,8 @@ class DfsphSolver {
   double computeDensityAndFactor(SolverContext& ctx);
   /// divergence-free solve (Algorithm 2 of Bender & Koschier 2017) for step size dt
   SolveResult divergenceSolve(SolverContext& ctx, Real dt);
-  /// gravity, viscosity (standard form, Monaghan 2005) and surface tension (Akinci 2013) into fluid.a
-  void nonPressureForces(SolverContext& ctx);
+  /// gravity, XSPH viscosity over a step of dtPrevious and surface tension (Akinci 2013) into fluid.a
+  void nonPressureForces(SolverContext& ctx, Real dtPrevious);
   /// CFL step: cfl * min_i(2 r_i / |v_i + a_i dt|), clamped to [dt_min, dt_max]
   Real cflTimeStep(const SolverContext& ctx, Real dtPrevious) const;
   /// constant-density solve (Algorithm 3 of Bender & Koschier 2017) for step size dt

@@ -28,10 +28,10 @@ ParamTable::ParamTable() {
   add("rest_density", "fluid", "kg/m^3", R, 100.0, 20000.0, false, "rest density rho0", &P::restDensity);
   add("gravity", "fluid", "m/s^2", ParamKind::Vector3, -100.0, 100.0, true, "gravitational acceleration",
       &P::gravity);
-  add("viscosity", "fluid", "m^2/s", R, 0.0, 10.0, true, "viscosity between fluid particles (standard form)",
+  add("viscosity", "fluid", "-", R, 0.0, 1.0, true, "XSPH viscosity: velocity smoothing per step",
       &P::viscosity);
-  add("boundary_viscosity", "fluid", "m^2/s", R, 0.0, 10.0, true,
-      "viscosity against boundaries (wall friction)", &P::boundaryViscosity);
+  add("boundary_viscosity", "fluid", "-", R, 0.0, 1.0, true, "XSPH friction against boundaries",
+      &P::boundaryViscosity);
   add("surface_tension", "fluid", "-", R, 0.0, 10.0, true, "Akinci 2013 surface tension coefficient, 0 = off",
       &P::surfaceTension);
   add("cfl_factor", "time", "-", R, 0.01, 1.0, true, "CFL number: dt = cfl * 2r / max speed", &P::cflFactor);

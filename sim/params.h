@@ -19,8 +19,8 @@ struct SimParams {
   double particleRadius = 0.025;  ///< radius r of the finest particles [m]; spacing is 2r, support 4r
   double restDensity = 1000.0;    ///< rest density rho0 [kg/m^3]
   std::array<double, 3> gravity{0.0, -9.81, 0.0};  ///< gravitational acceleration [m/s^2]
-  double viscosity = 0.01;         ///< fluid viscosity coefficient (Monaghan/Morris standard form) [m^2/s]
-  double boundaryViscosity = 0.0;  ///< viscosity against boundaries (friction) [m^2/s]
+  double viscosity = 0.01;         ///< XSPH viscosity: share of the velocity difference smoothed per step [-]
+  double boundaryViscosity = 0.0;  ///< XSPH friction against boundaries [-]
   double surfaceTension = 0.0;     ///< Akinci 2013 cohesion + curvature coefficient, 0 = off [-]
   // time stepping
   double cflFactor = 0.4;  ///< CFL number: dt = cfl * 2r / v_max [-]

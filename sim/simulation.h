@@ -102,6 +102,8 @@ class Simulation {
   void setColliderPose(std::size_t collider, const Vec3d& position, const Quatd& orientation,
                        const Vec3d& linearVelocity, const Vec3d& angularVelocity);
 
+  /// pressure of fluid particle i from the stiffness of both solves of the last step, p = k rho^2 / rho0 [Pa]
+  double pressure(std::size_t i) const;
   /// total fluid mass [kg]
   double totalMass() const { return m_fluid.totalMass(); }
   /// total fluid momentum [kg m/s]

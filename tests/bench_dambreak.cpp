@@ -1,1 +1,452 @@
-int main() { return 0; }
+/// fp_bench: the foundation benchmark. Runs the standard dam break (the same scene, resolution and simulated
+/// time as the reference CPU library SPlisHSPlasH's dam break) once per requested thread count, then prints
+/// an aligned table, the same figures as CSV and, for the high-resolution scene, a comparison with the
+/// reference measured on this machine.
+///
+///   fp_bench [--scene FILE] [--sim-time S] [--threads LIST] [--csv FILE] [--quick] [--help]
+
+#include <tbb/global_control.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <iostream>
+#include <optional>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "engine/cli.h"
+#include "engine/scene_loader.h"
+#include "sim/simulation.h"
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using fp::engine::kExitInput;
+using fp::engine::kExitOk;
+using fp::engine::kExitUnstable;
+using fp::engine::kExitUsage;
+
+const char* const kDefaultScene = FP_SOURCE_DIR "/assets/scenes/dam_break_hires.json";
+const char* const kQuickScene = FP_SOURCE_DIR "/assets/scenes/dam_break.json";
+/// The reference runs its dam break for 2 s of simulated time; the default matches so the totals compare.
+constexpr double kDefaultSimTime = 2.0;
+/// --quick is a smoke test: long enough to pass the first impact, short enough for CI.
+constexpr double kQuickSimTime = 0.5;
+/// Seconds of wall time between progress lines; the hires run takes minutes and would look hung otherwise.
+constexpr double kProgressInterval = 10.0;
+/// MB in this program means MiB (2^20 bytes), the unit /proc/self/status reports in (as kB = KiB).
+constexpr double kBytesPerMB = 1024.0 * 1024.0;
+
+/// The reference: SPlisHSPlasH 2.16 (single precision, AVX2, OpenMP, 2 threads) on its dam break at 103,823
+/// particles, measured by the project on this same 2-core machine (issue #2). Only our 2-thread run is
+/// compared with it, since that is the configuration it was measured in.
+constexpr std::size_t kRefParticles = 103823;
+constexpr int kRefThreads = 2;
+constexpr double kRefMsPerStep = 225.0;
+constexpr double kRefMParticleStepsPerS = 0.46;
+constexpr double kRefWallPerSimSecond = 136.0;
+constexpr double kRefDensityIterations = 4.4;
+constexpr double kRefDivergenceIterations = 1.4;
+constexpr double kRefNeighborMsPerStep = 110.0;
+
+std::string usage() {
+  return "usage: fp_bench [--scene FILE] [--sim-time S] [--threads LIST] [--csv FILE] [--quick] [--help]\n"
+         "  --scene FILE    scene JSON (default assets/scenes/dam_break_hires.json, the reference's)\n"
+         "  --sim-time S    simulated seconds per run (default 2.0, the reference's)\n"
+         "  --threads LIST  comma-separated thread counts, one run each (default 1,2)\n"
+         "  --csv FILE      also write the CSV to FILE\n"
+         "  --quick         smoke test: assets/scenes/dam_break.json for 0.5 s (--scene/--sim-time win)\n"
+         "  --help          this text\n"
+         "exit codes: 0 ok, 2 bad command line, 3 bad scene or output, 4 simulation unstable\n";
+}
+
+struct Options {
+  bool help = false;
+  bool quick = false;
+  std::optional<std::string> scene;
+  std::optional<double> simTime;
+  std::vector<int> threads{1, 2};
+  std::string csvPath;
+};
+
+double parsePositive(const std::string& flag, const std::string& text) {
+  std::size_t used = 0;
+  double value = 0.0;
+  try {
+    value = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (text.empty() || used != text.size() || !(value > 0.0) || !std::isfinite(value))
+    throw std::invalid_argument(flag + " expects a positive number, got '" + text + "'");
+  return value;
+}
+
+std::vector<int> parseThreadList(const std::string& text) {
+  std::vector<int> list;
+  std::stringstream in(text);
+  std::string item;
+  // getline drops a trailing empty field, so "1," would slip through; check the last character first.
+  if (text.empty() || text.back() == ',')
+    throw std::invalid_argument("--threads expects a comma-separated list of thread counts, got '" + text +
+                                "'");
+  while (std::getline(in, item, ',')) {
+    std::size_t used = 0;
+    long value = 0;
+    try {
+      value = std::stol(item, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (item.empty() || used != item.size() || value < 1 || value > 1024)
+      throw std::invalid_argument("--threads expects thread counts in [1, 1024], got '" + text + "'");
+    list.push_back(int(value));
+  }
+  return list;
+}
+
+Options parseOptions(const std::vector<std::string>& args) {
+  Options o;
+  for (std::size_t k = 0; k < args.size(); ++k) {
+    const std::string& a = args[k];
+    auto value = [&]() -> const std::string& {
+      if (k + 1 >= args.size())
+        throw std::invalid_argument(a + " needs a value");
+      return args[++k];
+    };
+    if (a == "--help" || a == "-h") {
+      o.help = true;
+    } else if (a == "--quick") {
+      o.quick = true;
+    } else if (a == "--scene") {
+      o.scene = value();
+    } else if (a == "--sim-time") {
+      o.simTime = parsePositive(a, value());
+    } else if (a == "--threads") {
+      o.threads = parseThreadList(value());
+    } else if (a == "--csv") {
+      o.csvPath = value();
+      if (o.csvPath.empty())
+        throw std::invalid_argument("--csv needs a file name");
+    } else {
+      throw std::invalid_argument("unknown option '" + a + "'");
+    }
+  }
+  return o;
+}
+
+/// One line: CPU model and logical CPU count, so a pasted table says what it was measured on.
+std::string machineDescription() {
+  std::ifstream in("/proc/cpuinfo");
+  std::string line;
+  std::string model = "unknown CPU";
+  int cpus = 0;
+  while (std::getline(in, line)) {
+    const auto colon = line.find(':');
+    if (colon == std::string::npos)
+      continue;
+    const std::string key = line.substr(0, line.find_last_not_of(" \t", colon - 1) + 1);
+    if (key == "processor") {
+      ++cpus;
+    } else if (key == "model name" && model == "unknown CPU") {
+      const auto begin = line.find_first_not_of(" \t", colon + 1);
+      if (begin != std::string::npos)
+        model = line.substr(begin);
+    }
+  }
+  if (cpus == 0)
+    cpus = int(std::thread::hardware_concurrency());
+  return model + ", " + std::to_string(cpus) + " logical CPUs";
+}
+
+/// Peak resident set of the process (VmHWM) in bytes, 0 when /proc is unavailable. The kernel keeps the peak
+/// for the process lifetime, so after several runs it is the largest of them, not the last one's own.
+double peakRssBytes() {
+  std::ifstream in("/proc/self/status");
+  std::string line;
+  while (std::getline(in, line)) {
+    if (line.rfind("VmHWM:", 0) == 0)
+      return std::stod(line.substr(6)) * 1024.0;  // "VmHWM:   123456 kB"
+  }
+  return 0.0;
+}
+
+/// Figures of one run, one CSV row.
+struct Row {
+  int threads = 0;
+  std::size_t particles = 0;
+  std::uint64_t steps = 0;
+  double simSeconds = 0;
+  double wallSeconds = 0;
+  double msPerStep = 0;
+  double usPerParticleStep = 0;
+  double mParticleStepsPerS = 0;
+  double wallPerSimSecond = 0;
+  double densityIterations = 0;
+  double divergenceIterations = 0;
+  double neighborsPerParticle = 0;
+  fp::sim::PhaseTimes msPerStepByPhase;  ///< in ms per step, not seconds
+  double memMB = 0;
+  double bytesPerParticle = 0;
+  double peakRssMB = 0;
+  double densityErrorMeanPct = 0;
+};
+
+/// A column of the table and the CSV: name, digits after the point, and how to read it from a row.
+struct Metric {
+  const char* name;
+  int precision;  ///< digits after the decimal point; 0 prints an integer
+  std::function<double(const Row&)> get;
+};
+
+const std::vector<Metric>& metrics() {
+  static const std::vector<Metric> list = {
+      {"threads", 0, [](const Row& r) { return double(r.threads); }},
+      {"particles", 0, [](const Row& r) { return double(r.particles); }},
+      {"steps", 0, [](const Row& r) { return double(r.steps); }},
+      {"sim_s", 4, [](const Row& r) { return r.simSeconds; }},
+      {"wall_s", 3, [](const Row& r) { return r.wallSeconds; }},
+      {"ms_per_step", 3, [](const Row& r) { return r.msPerStep; }},
+      {"us_per_particle_step", 4, [](const Row& r) { return r.usPerParticleStep; }},
+      {"Mparticle_steps_per_s", 4, [](const Row& r) { return r.mParticleStepsPerS; }},
+      {"wall_s_per_sim_s", 2, [](const Row& r) { return r.wallPerSimSecond; }},
+      {"density_iters", 3, [](const Row& r) { return r.densityIterations; }},
+      {"divergence_iters", 3, [](const Row& r) { return r.divergenceIterations; }},
+      {"neighbors_per_particle", 2, [](const Row& r) { return r.neighborsPerParticle; }},
+      {"neighbors_ms", 3, [](const Row& r) { return r.msPerStepByPhase.neighbors; }},
+      {"density_ms", 3, [](const Row& r) { return r.msPerStepByPhase.density; }},
+      {"divergence_ms", 3, [](const Row& r) { return r.msPerStepByPhase.divergence; }},
+      {"viscosity_ms", 3, [](const Row& r) { return r.msPerStepByPhase.viscosity; }},
+      {"pressure_ms", 3, [](const Row& r) { return r.msPerStepByPhase.pressure; }},
+      {"boundaries_ms", 3, [](const Row& r) { return r.msPerStepByPhase.boundaries; }},
+      {"integrate_ms", 3, [](const Row& r) { return r.msPerStepByPhase.integrate; }},
+      {"mem_MB", 2, [](const Row& r) { return r.memMB; }},
+      {"bytes_per_particle", 1, [](const Row& r) { return r.bytesPerParticle; }},
+      {"peak_rss_MB", 2, [](const Row& r) { return r.peakRssMB; }},
+      {"density_error_mean_pct", 4, [](const Row& r) { return r.densityErrorMeanPct; }},
+  };
+  return list;
+}
+
+std::string format(double value, int precision) {
+  char text[64];
+  std::snprintf(text, sizeof(text), "%.*f", precision, value);
+  return text;
+}
+
+/// Runs the scene for `simTime` seconds on `threads` threads. Only the stepping loop is timed: loading the
+/// scene and sampling the boundaries are set-up, which the reference's per-step figures leave out as well.
+Row runOnce(const std::string& scenePath, double simTime, int threads) {
+  tbb::global_control control(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
+  const fp::sim::SceneDesc scene = fp::engine::loadScene(scenePath);
+  fp::sim::Simulation simulation(scene);
+  std::cerr << "run: " << threads << " thread(s), " << simulation.particles().size() << " fluid particles, "
+            << simulation.boundary().size() << " boundary particles, " << simTime << " s to simulate\n";
+
+  const auto start = Clock::now();
+  auto lastReport = start;
+  // The small tolerance stops a CFL step that lands a hair short of simTime from adding a whole extra step.
+  while (simulation.time() < simTime - 1e-12) {
+    simulation.step();
+    const auto now = Clock::now();
+    if (std::chrono::duration<double>(now - lastReport).count() >= kProgressInterval) {
+      lastReport = now;
+      const double wall = std::chrono::duration<double>(now - start).count();
+      const double eta = wall / simulation.time() * (simTime - simulation.time());
+      char line[160];
+      std::snprintf(line, sizeof(line), "  t = %.4f / %.4f s, step %llu, wall %.1f s, eta %.0f s\n",
+                    simulation.time(), simTime, (unsigned long long)simulation.stepCount(), wall, eta);
+      std::cerr << line << std::flush;
+    }
+  }
+  const double wall = std::chrono::duration<double>(Clock::now() - start).count();
+
+  const fp::sim::RunStats& run = simulation.runStats();
+  Row r;
+  r.threads = threads;
+  r.particles = simulation.particles().size();
+  r.steps = run.steps;
+  r.simSeconds = simulation.time();
+  r.wallSeconds = wall;
+  const double steps = double(std::max<std::uint64_t>(run.steps, 1));
+  const double particleSteps = double(std::max<std::uint64_t>(run.particleSteps, 1));
+  r.msPerStep = wall * 1e3 / steps;
+  r.usPerParticleStep = wall * 1e6 / particleSteps;
+  r.mParticleStepsPerS = wall > 0 ? double(run.particleSteps) / wall * 1e-6 : 0.0;
+  r.wallPerSimSecond = r.simSeconds > 0 ? wall / r.simSeconds : 0.0;
+  r.densityIterations = double(run.densityIterations) / steps;
+  r.divergenceIterations = double(run.divergenceIterations) / steps;
+  r.neighborsPerParticle = run.neighborsSum / steps;
+  const fp::sim::PhaseTimes& t = run.times;
+  r.msPerStepByPhase.neighbors = t.neighbors * 1e3 / steps;
+  r.msPerStepByPhase.density = t.density * 1e3 / steps;
+  r.msPerStepByPhase.divergence = t.divergence * 1e3 / steps;
+  r.msPerStepByPhase.viscosity = t.viscosity * 1e3 / steps;
+  r.msPerStepByPhase.pressure = t.pressure * 1e3 / steps;
+  r.msPerStepByPhase.boundaries = t.boundaries * 1e3 / steps;
+  r.msPerStepByPhase.integrate = t.integrate * 1e3 / steps;
+  const std::size_t bytes = simulation.memoryBytes();
+  r.memMB = double(bytes) / kBytesPerMB;
+  r.bytesPerParticle = r.particles ? double(bytes) / double(r.particles) : 0.0;
+  r.peakRssMB = peakRssBytes() / kBytesPerMB;
+  r.densityErrorMeanPct = 100.0 * run.densityErrorSum / steps;
+  return r;
+}
+
+/// The table is transposed (one metric a line, one column per thread count): 23 columns side by side would be
+/// far wider than any terminal.
+void printTable(std::ostream& out, const std::vector<Row>& rows) {
+  std::size_t nameWidth = 0;
+  for (const Metric& m : metrics())
+    nameWidth = std::max(nameWidth, std::string(m.name).size());
+  std::size_t valueWidth = 10;
+  for (const Metric& m : metrics())
+    for (const Row& r : rows)
+      valueWidth = std::max(valueWidth, format(m.get(r), m.precision).size() + 2);
+  for (const Metric& m : metrics()) {
+    std::string line = m.name;
+    line.resize(nameWidth, ' ');
+    for (const Row& r : rows) {
+      const std::string v = format(m.get(r), m.precision);
+      line += std::string(valueWidth - v.size(), ' ') + v;
+    }
+    out << line << "\n";
+  }
+}
+
+void writeCsv(std::ostream& out, const std::vector<Row>& rows) {
+  bool first = true;
+  for (const Metric& m : metrics()) {
+    out << (first ? "" : ",") << m.name;
+    first = false;
+  }
+  out << "\n";
+  for (const Row& r : rows) {
+    first = true;
+    for (const Metric& m : metrics()) {
+      // two more digits than the table: the CSV feeds plots and regression checks, not eyes
+      out << (first ? "" : ",") << format(m.get(r), m.precision == 0 ? 0 : m.precision + 2);
+      first = false;
+    }
+    out << "\n";
+  }
+}
+
+void printComparison(std::ostream& out, const std::vector<Row>& rows, double simTime) {
+  const Row* ours = nullptr;
+  for (const Row& r : rows)
+    if (r.threads == kRefThreads)
+      ours = &r;
+  out << "\nComparison with SPlisHSPlasH 2.16 (single precision, AVX2, OpenMP, " << kRefThreads
+      << " threads, " << kRefParticles << " particles), measured on this machine (issue #2):\n";
+  if (!ours) {
+    out << "  no " << kRefThreads << "-thread run; add " << kRefThreads << " to --threads to compare\n";
+    return;
+  }
+  if (ours->particles != kRefParticles)
+    out << "  note: " << ours->particles << " particles here against the reference's " << kRefParticles
+        << "; the work is not the same\n";
+  if (simTime < kDefaultSimTime)
+    out << "  note: " << simTime << " s simulated against the reference's " << kDefaultSimTime
+        << " s; per-step figures early in the collapse differ from the whole run's\n";
+
+  /// How a line's ratio is taken, so that above 1 always means "we do better" where better exists.
+  enum class Kind { kTime, kThroughput, kCount };
+  struct Line {
+    const char* name;
+    double reference;
+    double ours;
+    Kind kind;
+  };
+  const Line lines[] = {
+      {"ms per step", kRefMsPerStep, ours->msPerStep, Kind::kTime},
+      {"M particle-steps per s", kRefMParticleStepsPerS, ours->mParticleStepsPerS, Kind::kThroughput},
+      {"wall s per simulated s", kRefWallPerSimSecond, ours->wallPerSimSecond, Kind::kTime},
+      {"density iterations per step", kRefDensityIterations, ours->densityIterations, Kind::kCount},
+      {"divergence iterations per step", kRefDivergenceIterations, ours->divergenceIterations, Kind::kCount},
+      {"neighbour search ms per step", kRefNeighborMsPerStep, ours->msPerStepByPhase.neighbors, Kind::kTime},
+  };
+  char text[200];
+  std::snprintf(text, sizeof(text), "  %-32s %10s %10s %8s\n", "metric", "reference", "ours", "ratio");
+  out << text;
+  for (const Line& l : lines) {
+    const bool timeRatio = l.kind == Kind::kTime;
+    const double num = timeRatio ? l.reference : l.ours;
+    const double den = timeRatio ? l.ours : l.reference;
+    const double ratio = den > 0 ? num / den : 0.0;
+    // Iterations are not a speed: fewer can mean a looser solve, so they get no "faster" reading.
+    const char* meaning = l.kind == Kind::kTime         ? "ref/ours, >1: we are faster"
+                          : l.kind == Kind::kThroughput ? "ours/ref, >1: we are faster"
+                                                        : "ours/ref";
+    std::snprintf(text, sizeof(text), "  %-32s %10.3f %10.3f %8.2f  (%s)\n", l.name, l.reference, l.ours,
+                  ratio, meaning);
+    out << text;
+  }
+}
+
+/// The comparison only makes sense for the reference's own scene: the hires dam break.
+bool isHiresScene(const std::string& path) {
+  return std::filesystem::path(path).filename() == "dam_break_hires.json";
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options options;
+  try {
+    options = parseOptions(std::vector<std::string>(argv + 1, argv + argc));
+  } catch (const std::invalid_argument& e) {
+    std::cerr << "fp_bench: " << e.what() << "\n" << usage();
+    return kExitUsage;
+  }
+  if (options.help) {
+    std::cout << usage();
+    return kExitOk;
+  }
+  const std::string scenePath = options.scene.value_or(options.quick ? kQuickScene : kDefaultScene);
+  const double simTime = options.simTime.value_or(options.quick ? kQuickSimTime : kDefaultSimTime);
+
+  std::vector<Row> rows;
+  try {
+    // Load once up front so a bad scene fails before anything is printed; each run loads its own copy.
+    const fp::sim::SceneDesc scene = fp::engine::loadScene(scenePath);
+    std::cout << "fp_bench: " << scene.name << " (" << scenePath << "), " << simTime
+              << " s simulated per run\n"
+              << "machine: " << machineDescription() << "\n";
+    for (int threads : options.threads)
+      rows.push_back(runOnce(scenePath, simTime, threads));
+  } catch (const fp::sim::InputError& e) {
+    std::cerr << "fp_bench: " << e.what() << "\n";
+    return kExitInput;
+  } catch (const fp::sim::InstabilityError& e) {
+    std::cerr << "fp_bench: unstable: " << e.what() << "\n";
+    return kExitUnstable;
+  }
+
+  std::cout << "\n";
+  printTable(std::cout, rows);
+  std::cout << "(ms columns are per step; MB = 2^20 bytes; peak_rss_MB is the process peak so far, so it "
+               "includes earlier runs; mem_MB is this run's simulation alone)\n";
+  std::cout << "\nCSV:\n";
+  writeCsv(std::cout, rows);
+  if (!options.csvPath.empty()) {
+    std::ofstream csv(options.csvPath);
+    if (csv)
+      writeCsv(csv, rows);
+    if (!csv) {
+      std::cerr << "fp_bench: " << options.csvPath << ": cannot write the CSV\n";
+      return kExitInput;
+    }
+  }
+  if (isHiresScene(scenePath))
+    printComparison(std::cout, rows, simTime);
+  return kExitOk;
+}

@@ -1,1 +1,121 @@
-// placeholder
+// The command line and the headless runner: bad input gives a usage error or a clear message and a non-zero
+// exit; a good run prints a summary and writes the stats JSON with the documented keys, and PLY frames.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "engine/cli.h"
+#include "engine/headless_runner.h"
+#include "render/camera.h"
+
+using namespace fp::engine;
+
+namespace {
+std::string scene(const std::string& name) {
+  return std::string(FP_SOURCE_DIR) + "/assets/scenes/" + name;
+}
+
+int runExe(const std::string& args) {
+  const std::string cmd = std::string(FP_FLUIDPLAYING_EXE) + " " + args + " > /dev/null 2>&1";
+  const int status = std::system(cmd.c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+}  // namespace
+
+TEST(CliTest, ParsesOptions) {
+  const CliOptions o =
+      parseCommandLine({"--headless", "--scene", "a.json", "--frames", "10", "--threads", "1", "--seed", "42",
+                        "--stats", "s.json", "--export", "out", "--quiet"});
+  EXPECT_TRUE(o.headless);
+  EXPECT_EQ(o.scenePath, "a.json");
+  EXPECT_EQ(o.frames.value(), 10);
+  EXPECT_EQ(o.threads, 1);
+  EXPECT_EQ(o.seed.value(), 42u);
+  EXPECT_EQ(o.statsPath, "s.json");
+  EXPECT_EQ(o.exportDir, "out");
+  EXPECT_TRUE(o.quiet);
+  EXPECT_FALSE(parseCommandLine({}).scenePath.empty());  // the default scene
+}
+
+TEST(CliTest, RejectsBadInput) {
+  EXPECT_THROW(parseCommandLine({"--bogus"}), std::invalid_argument);
+  EXPECT_THROW(parseCommandLine({"--frames"}), std::invalid_argument);
+  EXPECT_THROW(parseCommandLine({"--frames", "ten"}), std::invalid_argument);
+  EXPECT_THROW(parseCommandLine({"--frames", "0"}), std::invalid_argument);
+  EXPECT_THROW(parseCommandLine({"--threads", "2.5"}), std::invalid_argument);
+  EXPECT_THROW(parseCommandLine({"--sim-time", "-1"}), std::invalid_argument);
+  EXPECT_THROW(parseCommandLine({"--frames", "3", "--sim-time", "1"}), std::invalid_argument);
+  try {
+    parseCommandLine({"--frames", "ten"});
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("--frames"), std::string::npos);
+  }
+}
+
+TEST(CliTest, ExitCodesOfTheExecutable) {
+  EXPECT_EQ(runExe("--help"), kExitOk);
+  EXPECT_EQ(runExe("--no-such-flag"), kExitUsage);
+  EXPECT_EQ(runExe("--headless --scene /nonexistent/scene.json"), kExitInput);
+  const std::string bad = ::testing::TempDir() + "/fp_bad_scene.json";
+  std::ofstream(bad) << "{\"domain\": 3}";
+  EXPECT_EQ(runExe("--headless --quiet --scene " + bad), kExitInput);
+}
+
+TEST(HeadlessRunnerTest, WritesSummaryStatsAndFramesSmall) {
+  const std::string dir = ::testing::TempDir() + "/fp_headless_run";
+  std::filesystem::remove_all(dir);
+  CliOptions o;
+  o.headless = true;
+  o.quiet = true;
+  o.scenePath = scene("tiny_dam_break.json");
+  o.frames = 6;
+  o.threads = 1;
+  o.exportDir = dir + "/frames";
+  o.statsPath = dir + "/stats.json";
+  std::ostringstream out, progress;
+  const RunSummary s = runHeadless(o, out, progress);
+  EXPECT_EQ(s.status, "ok");
+  EXPECT_EQ(s.frames, 6);
+  EXPECT_NEAR(s.simSeconds, 0.1, 0.01);
+  EXPECT_GT(s.steps, 10u);
+  EXPECT_EQ(s.massInitial, s.massFinal);
+  writeStatsJson(o.statsPath, s);
+  std::ifstream in(o.statsPath);
+  const nlohmann::json j = nlohmann::json::parse(in);
+  for (const char* key :
+       {"particles_mean", "particles_max", "steps", "sim_seconds", "wall_seconds", "us_per_particle_step",
+        "density_error_mean", "density_error_max", "mass_initial", "mass_final"}) {
+    EXPECT_TRUE(j.contains(key)) << key;
+  }
+  EXPECT_EQ(j["steps"].get<std::uint64_t>(), s.steps);
+  EXPECT_EQ(j["particles_max"].get<std::size_t>(), s.particlesMax);
+  for (int f = 0; f <= 6; ++f) {
+    char name[32];
+    std::snprintf(name, sizeof(name), "frame_%05d.ply", f);
+    EXPECT_TRUE(std::filesystem::exists(dir + "/frames/" + name)) << name;
+  }
+  std::ostringstream summary;
+  printSummary(summary, s);
+  EXPECT_NE(summary.str().find("us per particle-step"), std::string::npos);
+  EXPECT_THROW(writeStatsJson("/nonexistent/dir/stats.json", s), fp::sim::InputError);
+}
+
+TEST(CameraTest, FramesABoxAndProjectsItsCentreToTheMiddle) {
+  fp::render::OrbitCamera cam;
+  cam.frame(Eigen::Vector3f(-1, 0, -0.5f), Eigen::Vector3f(1, 1, 0.5f), 16.0f / 9.0f);
+  const Eigen::Vector4f c = cam.projection(16.0f / 9.0f) * cam.view() * Eigen::Vector4f(0, 0.5f, 0, 1);
+  EXPECT_NEAR(c.x() / c.w(), 0.0f, 1e-5f);
+  EXPECT_NEAR(c.y() / c.w(), 0.0f, 1e-5f);
+  // every corner of the box lands inside the view
+  for (int k = 0; k < 8; ++k) {
+    const Eigen::Vector4f p(k & 1 ? 1.0f : -1.0f, k & 2 ? 1.0f : 0.0f, k & 4 ? 0.5f : -0.5f, 1.0f);
+    const Eigen::Vector4f q = cam.projection(16.0f / 9.0f) * cam.view() * p;
+    EXPECT_LE(std::abs(q.x() / q.w()), 1.0f);
+    EXPECT_LE(std::abs(q.y() / q.w()), 1.0f);
+    EXPECT_GT(q.w(), 0.0f);
+  }
+}

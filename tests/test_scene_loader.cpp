@@ -143,7 +143,7 @@ TEST(SceneLoaderTest, DamBreakHiresDiffersOnlyInRadius) {
 
 TEST(SceneLoaderTest, TankRestLoads) {
   const sim::SceneDesc scene = loadScene(scenePath("tank_rest.json"));
-  EXPECT_DOUBLE_EQ(scene.params.particleRadius, 0.01);
+  EXPECT_DOUBLE_EQ(scene.params.particleRadius, 0.0098039);
   EXPECT_DOUBLE_EQ(scene.simTime, 2.0);
   ASSERT_EQ(scene.colliders.size(), 1u);
   const sim::ColliderDesc& tank = scene.colliders[0];
