@@ -4,6 +4,8 @@
 #include <filesystem>
 #include <stdexcept>
 
+#include "sim/scene.h"
+
 namespace fp::engine {
 
 namespace {
@@ -36,13 +38,15 @@ long long parseInteger(const std::string& flag, const std::string& text, long lo
 std::string usage() {
   return "usage: fluidplaying [--headless] [--scene FILE] [--frames N | --sim-time S] [--threads T] [--seed "
          "N]\n"
-         "                    [--stats FILE.json] [--export DIR] [--quiet] [--help]\n"
+         "                    [--mode NAME] [--stats FILE.json] [--export DIR] [--quiet] [--help]\n"
          "  --headless      run without a window or GL (the only mode of this build)\n"
          "  --scene FILE    scene JSON (default assets/scenes/dam_break.json)\n"
          "  --frames N      simulate N frames at the scene's frame rate\n"
          "  --sim-time S    simulate S seconds (default: the scene's sim_time)\n"
          "  --threads T     worker threads (default: all cores)\n"
          "  --seed N        seed of every random choice (overrides the scene)\n"
+         "  --mode NAME     resolution: uniform-low, uniform-high, surface or fluidplaying (default: the "
+         "scene's)\n"
          "  --stats FILE    write the run's statistics as JSON\n"
          "  --export DIR    write the particles of every frame as binary PLY into DIR\n"
          "  --quiet         no progress lines\n"
@@ -79,6 +83,12 @@ CliOptions parseCommandLine(const std::vector<std::string>& args) {
       o.seed = std::uint64_t(parseInteger(a, value(), 0, 4294967295LL));
     } else if (a == "--stats") {
       o.statsPath = value();
+    } else if (a == "--mode") {
+      o.mode = value();
+      if (!sim::parseMode(o.mode)) {
+        throw std::invalid_argument("--mode expects one of " + std::string(sim::modeNames()) + ", got '" +
+                                    o.mode + "'");
+      }
     } else if (a == "--export") {
       o.exportDir = value();
     } else {

@@ -28,6 +28,7 @@ struct CliOptions {
   std::string statsPath;              ///< --stats FILE.json
   std::string exportDir;              ///< --export DIR
   bool quiet = false;                 ///< --quiet: no progress lines
+  std::string mode;                   ///< --mode NAME (empty: the scene's mode)
 };
 
 /// Parses argv; throws std::invalid_argument with a one-line message for bad input.

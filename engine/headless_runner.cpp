@@ -25,10 +25,17 @@ void exportFrame(const std::string& dir, int frame, const sim::ParticleSet& part
 }
 }  // namespace
 
-RunSummary runHeadless(const CliOptions& options, std::ostream& out, std::ostream& progress) {
+RunSummary runHeadless(const CliOptions& options, std::ostream& out, std::ostream& progress,
+                       const FrameCallback& onFrame) {
   sim::SceneDesc scene = loadScene(options.scenePath);
   if (options.seed)
     scene.params.seed = *options.seed;
+  if (!options.mode.empty()) {
+    const auto mode = sim::parseMode(options.mode);
+    if (!mode)
+      throw sim::InputError("unknown mode '" + options.mode + "' (expected " + sim::modeNames() + ")");
+    scene.mode = *mode;
+  }
   const int threads = options.threads > 0 ? options.threads : int(tbb::info::default_concurrency());
   tbb::global_control control(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
 
@@ -59,6 +66,8 @@ RunSummary runHeadless(const CliOptions& options, std::ostream& out, std::ostrea
   int frame = 0;
   if (!options.exportDir.empty())
     exportFrame(options.exportDir, frame, simulation.particles());
+  if (onFrame)
+    onFrame(frame, simulation);
   const auto start = Clock::now();
   auto lastReport = start;
   try {
@@ -68,6 +77,8 @@ RunSummary runHeadless(const CliOptions& options, std::ostream& out, std::ostrea
         ++frame;
         if (!options.exportDir.empty())
           exportFrame(options.exportDir, frame, simulation.particles());
+        if (onFrame)
+          onFrame(frame, simulation);
       }
       const auto now = Clock::now();
       if (!options.quiet && std::chrono::duration<double>(now - lastReport).count() > 2.0) {

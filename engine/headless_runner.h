@@ -2,6 +2,7 @@
 /// The headless mode: runs a scene with no display and no GL, shows progress, prints a closing summary, and
 /// optionally writes statistics as JSON and particles per frame as PLY.
 
+#include <functional>
 #include <ostream>
 #include <string>
 
@@ -38,9 +39,14 @@ struct RunSummary {
   sim::PhaseTimes phases;               ///< "phase_seconds"
 };
 
+/// Called with every frame (frame 0 is the initial state), after the PLY export: the headless renderer writes
+/// its images here.
+using FrameCallback = std::function<void(int frame, const sim::Simulation& simulation)>;
+
 /// Runs the scene of `options` headless. Throws sim::InputError for a bad scene or unwritable output; an
 /// instability ends the run and is reported in the summary (status "unstable").
-RunSummary runHeadless(const CliOptions& options, std::ostream& out, std::ostream& progress);
+RunSummary runHeadless(const CliOptions& options, std::ostream& out, std::ostream& progress,
+                       const FrameCallback& onFrame = {});
 
 /// Writes a summary as JSON; throws sim::InputError when the file cannot be written.
 void writeStatsJson(const std::string& path, const RunSummary& summary);

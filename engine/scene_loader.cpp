@@ -8,6 +8,8 @@
 //   "domain": {"min": [x,y,z], "max": [x,y,z]},   // required; min < max in every component
 //   "sim_time": 2.0,                     // optional, (0, 1e4] s (default 2)
 //   "frame_rate": 60,                    // optional, [1, 1000] frames per simulated second (default 60)
+//   "mode": "fluidplaying",              // optional: uniform-low | uniform-high | surface | fluidplaying
+//                                        //   (default uniform-high: every particle at particle_radius)
 //   "parameters": {"<key>": value, ...}, // optional; keys and ranges from sim::ParamTable (sim/params.cpp):
 //                                        //   numbers, booleans for Bool parameters, 3-arrays for Vec3 ones
 //   "fluid": [                           // required, at least one block, each inside the domain
@@ -545,9 +547,9 @@ sim::ColliderDesc SceneReader::readCollider(const json& j, const std::string& pa
 
 sim::SceneDesc SceneReader::read(const json& root) const {
   const std::string path = "$";
-  expectObject(
-      root, path,
-      {"name", "description", "domain", "sim_time", "frame_rate", "parameters", "fluid", "colliders"});
+  expectObject(root, path,
+               {"name", "description", "domain", "sim_time", "frame_rate", "mode", "parameters", "fluid",
+                "colliders"});
   sim::SceneDesc scene;
 
   scene.name = fs::path(m_fileName).stem().string();
@@ -573,6 +575,14 @@ sim::SceneDesc SceneReader::read(const json& root) const {
     if (!(scene.frameRate >= 1.0 && scene.frameRate <= 1000.0)) {
       fail("$.frame_rate", "must be in [1, 1000] (got " + fmt(scene.frameRate) + ")");
     }
+  }
+
+  if (root.contains("mode")) {
+    const std::string mode = readString(root["mode"], "$.mode");
+    const auto parsed = sim::parseMode(mode);
+    if (!parsed)
+      fail("$.mode", "expected one of " + std::string(sim::modeNames()) + ", got '" + mode + "'");
+    scene.mode = *parsed;
   }
 
   if (root.contains("parameters"))

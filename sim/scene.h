@@ -3,7 +3,9 @@
 /// a test builds one in a few lines and the engine fills one from a JSON file.
 
 #include <memory>
+#include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "sim/mesh.h"
@@ -11,6 +13,41 @@
 #include "sim/types.h"
 
 namespace fp::sim {
+
+/// How the resolution is chosen (METHOD.md section 4). The first two are uniform references; `Surface` is
+/// the surface-only adaptivity of Winchenbach et al. 2017 (R_omega = R_nu = 1); `FluidPlaying` uses all three
+/// levels.
+enum class AdaptivityMode { UniformLow, UniformHigh, Surface, FluidPlaying };
+
+/// the scene-file and command-line name of a mode: uniform-low, uniform-high, surface, fluidplaying
+inline const char* modeName(AdaptivityMode m) {
+  switch (m) {
+    case AdaptivityMode::UniformLow:
+      return "uniform-low";
+    case AdaptivityMode::UniformHigh:
+      return "uniform-high";
+    case AdaptivityMode::Surface:
+      return "surface";
+    case AdaptivityMode::FluidPlaying:
+      return "fluidplaying";
+  }
+  return "?";
+}
+
+/// the mode named `name`, or nothing
+inline std::optional<AdaptivityMode> parseMode(std::string_view name) {
+  for (AdaptivityMode m : {AdaptivityMode::UniformLow, AdaptivityMode::UniformHigh, AdaptivityMode::Surface,
+                           AdaptivityMode::FluidPlaying}) {
+    if (name == modeName(m))
+      return m;
+  }
+  return std::nullopt;
+}
+
+/// the names of all modes, for messages: "uniform-low, uniform-high, surface, fluidplaying"
+inline const char* modeNames() {
+  return "uniform-low, uniform-high, surface, fluidplaying";
+}
 
 /// Shape of a collider, in its local frame (centred at the origin).
 enum class ShapeType { Box, Sphere, Capsule, Mesh };
@@ -53,6 +90,7 @@ struct SceneDesc {
   std::vector<ColliderDesc> colliders;             ///< walls and moving bodies
   double simTime = 2.0;                            ///< default simulated time of a run [s]
   double frameRate = 60.0;  ///< frames per simulated second for export and rendering [1/s]
+  AdaptivityMode mode = AdaptivityMode::UniformHigh;  ///< resolution mode
 };
 
 }  // namespace fp::sim
