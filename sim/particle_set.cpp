@@ -17,6 +17,11 @@ void ParticleSet::forEachField(F&& f) {
   f(splitTime, m_scratchReal);
   f(id, m_scratchU32);
   f(flags, m_scratchU32);
+  f(levelPhi, m_scratchReal);
+  f(levelOmega, m_scratchReal);
+  f(levelNu, m_scratchReal);
+  f(mOpt, m_scratchReal);
+  f(heavySteps, m_scratchU32);
 }
 
 std::size_t ParticleSet::add(const Vec3& position, const Vec3& velocity, Real mass, Real support,
@@ -32,6 +37,11 @@ std::size_t ParticleSet::add(const Vec3& position, const Vec3& velocity, Real ma
   splitTime.push_back(-1);
   id.push_back(m_nextId++);
   flags.push_back(0);
+  levelPhi.push_back(1);
+  levelOmega.push_back(1);
+  levelNu.push_back(1);
+  mOpt.push_back(mass);
+  heavySteps.push_back(0);
   return x.size() - 1;
 }
 
@@ -85,6 +95,11 @@ std::size_t ParticleSet::memoryBytes() const {
   count(splitTime);
   count(id);
   count(flags);
+  count(levelPhi);
+  count(levelOmega);
+  count(levelNu);
+  count(mOpt);
+  count(heavySteps);
   bytes += m_scratchVec.capacity() * sizeof(Vec3) + m_scratchReal.capacity() * sizeof(Real) +
            m_scratchU32.capacity() * sizeof(std::uint32_t);
   return bytes;

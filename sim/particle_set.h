@@ -29,6 +29,11 @@ class ParticleSet {
   std::vector<Real> splitTime;    ///< simulated time of the split that created the particle, -1 if none [s]
   std::vector<std::uint32_t> id;  ///< stable identifier, survives sorting
   std::vector<std::uint32_t> flags;  ///< ParticleFlag bits
+  std::vector<Real> levelPhi;        ///< visible level R_phi in [0, 1] (0 at the surface), adaptivity
+  std::vector<Real> levelOmega;      ///< vorticity level R_omega in [1, Rmax] [-]
+  std::vector<Real> levelNu;         ///< velocity-difference level R_nu in [1, Rmax] [-]
+  std::vector<Real> mOpt;            ///< optimal (target) mass of the adaptivity [kg]
+  std::vector<std::uint32_t> heavySteps;  ///< consecutive adaptation steps found too heavy (split delay)
 
   /// number of particles
   std::size_t size() const { return x.size(); }
