@@ -29,6 +29,16 @@ struct CliOptions {
   std::string exportDir;              ///< --export DIR
   bool quiet = false;                 ///< --quiet: no progress lines
   std::string mode;                   ///< --mode NAME (empty: the scene's mode)
+  // rendering (headless, through OSMesa)
+  bool render = false;                  ///< --render: write a PNG of every frame (implies --headless)
+  std::string outDir;                   ///< --out DIR: folder of the PNG files
+  int width = 1280;                     ///< --width W [px], in [16, 8192]
+  int height = 720;                     ///< --height H [px], in [16, 8192]
+  std::string view = "fluid";           ///< --view fluid | particles
+  std::string colorField;               ///< --color FIELD of the particle view (implies --view particles)
+  std::optional<double> highlightTime;  ///< --highlight-time S: red tint of split children [s], 0 = off
+  bool noSpray = false;                 ///< --no-spray
+  std::string shaderDir;                ///< --shaders DIR (default: shaders/ here, else the source tree's)
 };
 
 /// Parses argv; throws std::invalid_argument with a one-line message for bad input.

@@ -47,9 +47,27 @@ Mat4 OrbitCamera::projection(float aspect) const {
 void OrbitCamera::frame(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi, float aspect) {
   target = 0.5f * (lo + hi);
   const float radius = 0.5f * (hi - lo).norm();
-  // the bounding sphere must fit the narrower of the two fields of view
+  // the bounding sphere fits the narrower of the two fields of view: a distance that surely shows the box
   const float halfFov = 0.5f * std::min(fovY, 2.0f * std::atan(std::tan(0.5f * fovY) * aspect));
-  distance = radius / std::sin(halfFov);
+  float far = radius / std::sin(halfFov);
+  // then move in while every corner stays within 92% of the view (the sphere leaves much of it empty)
+  auto fits = [&](float d) {
+    distance = d;
+    const Mat4 m = projection(aspect) * view();
+    for (int k = 0; k < 8; ++k) {
+      const Eigen::Vector3f c(k & 1 ? hi.x() : lo.x(), k & 2 ? hi.y() : lo.y(), k & 4 ? hi.z() : lo.z());
+      const Eigen::Vector4f q = m * c.homogeneous();
+      if (q.w() <= 0.0f || std::abs(q.x()) > 0.92f * q.w() || std::abs(q.y()) > 0.92f * q.w())
+        return false;
+    }
+    return true;
+  };
+  float near = 0.2f * far;
+  for (int it = 0; it < 24; ++it) {
+    const float mid = 0.5f * (near + far);
+    (fits(mid) ? far : near) = mid;
+  }
+  distance = far;
 }
 
 }  // namespace fp::render

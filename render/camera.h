@@ -29,7 +29,8 @@ struct OrbitCamera {
   Mat4 view() const;
   /// projection matrix for an aspect ratio width/height, near and far planes fitted to the distance
   Mat4 projection(float aspect) const;
-  /// places the camera so that the box [lo, hi] fills the view at the current yaw and pitch
+  /// places the camera on the box centre, as close as keeps every corner of [lo, hi] in view (at 92% of the
+  /// half-extent) at the current yaw and pitch
   void frame(const Eigen::Vector3f& lo, const Eigen::Vector3f& hi, float aspect);
 };
 
