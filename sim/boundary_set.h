@@ -1,9 +1,12 @@
 #pragma once
 /// Boundary particles of Akinci et al. 2012 ("Versatile rigid-fluid coupling for incompressible SPH"): one
 /// layer of particles sampled on every collider surface, each with a volume psi_b = 1 / sum_k W(x_b - x_k)
-/// over the particles of its own collider, so that walls sampled unevenly still push back evenly. Static
-/// colliders' particles come first and are sorted into the grid once; kinematic colliders' particles follow
-/// and move with their collider's pose.
+/// over the particles of its own collider, so that walls sampled unevenly still push back evenly. A fluid
+/// particle of another size sees the wall through the pair support H_ib = (H_i + H_b) / 2; since a plane's
+/// kernel sum falls as 1 / H, the volumes are then scaled by H_ib / H_b, which keeps the wall as dense, for
+/// every particle size, as the fluid it stands in for (without it coarse particles sink into walls sampled
+/// for fine ones). Static colliders' particles come first and are sorted into the grid once; kinematic
+/// colliders' particles follow and move with their collider's pose.
 
 #include <cstdint>
 #include <vector>

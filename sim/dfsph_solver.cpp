@@ -67,7 +67,8 @@ double DfsphSolver::computeDensityAndFactor(SolverContext& ctx) {
                           [&](std::size_t i) {
                             const Vec3 xi = x[i];
                             const Real Hi = H[i];
-                            Real density = m[i] * invRho0 * CubicSpline::w0(Hi);
+                            const Real Vi = m[i] * invRho0;
+                            Real density = Vi * CubicSpline::w0(Hi);
                             Vec3 gradSum = Vec3::Zero();
                             Real sqSum = 0;
                             for (std::uint32_t k = fo[i]; k < fo[i + 1]; ++k) {
@@ -79,16 +80,22 @@ double DfsphSolver::computeDensityAndFactor(SolverContext& ctx) {
                               density += Vj * w;
                               const Vec3 gv = (Vj * g) * xij;
                               gradSum += gv;
-                              sqSum += gv.squaredNorm();
+                              // k_i moves neighbour j by V_i grad W (the pair update is symmetric), so the
+                              // second term of alpha is V_i V_j |grad W|^2, not V_j^2 |grad W|^2: the two
+                              // differ as soon as masses do, and the latter over-drives heavy particles among
+                              // light
+                              sqSum += Vi * Vj * (g * xij).squaredNorm();
                             }
                             const Real hb = pairSupport(Hi, Hb);
+                            const Real sb =
+                                hb / Hb;  // boundary volume scaled to the pair support (see BoundarySet)
                             for (std::uint32_t k = bo[i]; k < bo[i + 1]; ++k) {
                               const std::uint32_t b = bi[k];
                               const Vec3 xib = xi - xb[b];
                               Real w, g;
                               CubicSpline::evaluate(xib.norm(), hb, w, g);
-                              density += psi[b] * w;
-                              gradSum += (psi[b] * g) * xib;
+                              density += sb * psi[b] * w;
+                              gradSum += (sb * psi[b] * g) * xib;
                             }
                             p.rho[i] = density * rho0;
                             const Real denom = gradSum.squaredNorm() + sqSum;
@@ -128,11 +135,12 @@ void DfsphSolver::computeDensityRate(const SolverContext& ctx) {
         rate += m[j] * invRho0 * g * (vi - v[j]).dot(xij);
       }
       const Real hb = pairSupport(Hi, Hb);
+      const Real sb = hb / Hb;  // boundary volume scaled to the pair support (see BoundarySet)
       for (std::uint32_t k = bo[i]; k < bo[i + 1]; ++k) {
         const std::uint32_t b = bi[k];
         const Vec3 xib = xi - xb[b];
         const Real g = CubicSpline::gradFactor(xib.norm(), hb);
-        rate += psi[b] * g * (vi - vb[b]).dot(xib);
+        rate += sb * psi[b] * g * (vi - vb[b]).dot(xib);
       }
       m_rate[i] = rate;
     }
@@ -174,11 +182,12 @@ Vec3d DfsphSolver::applyStiffness(SolverContext& ctx, Real dt, std::vector<Real>
     if (ki != Real(0)) {
       // Akinci 2012: the boundary mirrors the particle's own pressure
       const Real hb = pairSupport(Hi, Hb);
+      const Real sb = hb / Hb;  // boundary volume scaled to the pair support (see BoundarySet)
       for (std::uint32_t q = bo[i]; q < bo[i + 1]; ++q) {
         const std::uint32_t b = bi[q];
         const Vec3 xib = xi - xb[b];
         const Real g = CubicSpline::gradFactor(xib.norm(), hb);
-        dvb -= (psi[b] * ki * g) * xib;
+        dvb -= (sb * psi[b] * ki * g) * xib;
       }
     }
     v[i] += dt * (dv + dvb);
@@ -345,9 +354,10 @@ void DfsphSolver::nonPressureForces(SolverContext& ctx, Real dtPrevious) {
     Vec3 ab = Vec3::Zero();
     if (cBVisc > 0) {
       const Real hb = pairSupport(Hi, Hb);
+      const Real sb = hb / Hb;  // boundary volume scaled to the pair support (see BoundarySet)
       for (std::uint32_t q = bo[i]; q < bo[i + 1]; ++q) {
         const std::uint32_t b = bi[q];
-        ab += (cBVisc * rho0 * psi[b] / rho[i] * CubicSpline::w((xi - xb[b]).norm(), hb)) * (vb[b] - vi);
+        ab += (cBVisc * rho0 * sb * psi[b] / rho[i] * CubicSpline::w((xi - xb[b]).norm(), hb)) * (vb[b] - vi);
       }
     }
     p.a[i] = ai + ab;

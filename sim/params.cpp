@@ -48,6 +48,46 @@ ParamTable::ParamTable() {
   add("divergence_solve", "solver", "-", B, 0, 1, true, "run the divergence-free solve", &P::divergenceSolve);
   add("warm_start", "solver", "-", B, 0, 1, true, "warm-start solves with the previous stiffness",
       &P::warmStart);
+  add("mass_ratio", "adaptivity", "-", R, 1.0, 125.0, true,
+      "m_base / m_fine: mass of the coarsest particles over the finest", &P::massRatio);
+  add("surface_distance_lo", "adaptivity", "r", R, 0.0, 1000.0, true,
+      "distance to the surface below which particles are finest (in fine radii)", &P::surfaceDistanceLo);
+  add("surface_distance_hi", "adaptivity", "r", R, 0.0, 1000.0, true,
+      "distance to the surface above which particles are coarsest (in fine radii)", &P::surfaceDistanceHi);
+  add("vorticity_lo", "adaptivity", "1/s", R, 0.0, 1e4, true, "vorticity at which refinement starts",
+      &P::vorticityLo);
+  add("vorticity_hi", "adaptivity", "1/s", R, 0.0, 1e4, true, "vorticity of full refinement (Rmax)",
+      &P::vorticityHi);
+  add("vorticity_rmax", "adaptivity", "-", R, 1.0, 1000.0, true, "largest vorticity level Rmax_omega",
+      &P::vorticityRmax);
+  add("velocity_difference_lo", "adaptivity", "m/s", R, 0.0, 100.0, true,
+      "velocity difference at which refinement starts", &P::velocityDifferenceLo);
+  add("velocity_difference_hi", "adaptivity", "m/s", R, 0.0, 100.0, true,
+      "velocity difference of full refinement (Rmax)", &P::velocityDifferenceHi);
+  add("velocity_difference_rmax", "adaptivity", "-", R, 1.0, 1000.0, true,
+      "largest velocity-difference level Rmax_nu", &P::velocityDifferenceRmax);
+  add("mass_smoothing", "adaptivity", "-", R, 0.01, 1.0, true,
+      "share of the new optimal mass taken per adaptation step (1: none)", &P::massSmoothing);
+  add("adaptation_period", "adaptivity", "steps", I, 1, 100, true, "solver steps between adaptation steps",
+      &P::adaptationPeriod);
+  add("split_delay", "adaptivity", "steps", I, 0, 100, true,
+      "adaptation steps a particle stays too heavy before it splits", &P::splitDelay);
+  add("split_max_children", "adaptivity", "-", I, 8, 27, true, "n_max: most children of one split",
+      &P::splitMaxChildren);
+  add("orientation_candidates", "adaptivity", "-", I, 1, 64, true,
+      "K: template rotations tried per split (the unrotated one included)", &P::orientationCandidates);
+  add("merge_below", "adaptivity", "-", R, 0.0, 1.0, true, "m/m_opt below which a particle is merged",
+      &P::mergeBelow);
+  add("light_below", "adaptivity", "-", R, 0.0, 1.0, true, "m/m_opt below which a particle receives mass",
+      &P::lightBelow);
+  add("share_above", "adaptivity", "-", R, 1.0, 10.0, true, "m/m_opt above which a particle shares mass",
+      &P::shareAbove);
+  add("split_above", "adaptivity", "-", R, 1.0, 10.0, true, "m/m_opt at or above which a particle splits",
+      &P::splitAbove);
+  add("transfer_rate", "adaptivity", "-", R, 0.01, 1.0, true,
+      "most mass a merge or share receiver gains per adaptation step (share of its own)", &P::transferRate);
+  add("support_blend_steps", "adaptivity", "steps", I, 0, 100, true,
+      "steps over which a changed support radius is blended in (0: at once)", &P::supportBlendSteps);
   add("max_speed", "robustness", "m/s", R, 0.1, 1000.0, true,
       "speed above which the run is reported unstable", &P::maxSpeed);
   add("seed", "robustness", "-", ParamKind::Seed, 0, 4294967295.0, false, "seed of every random choice",
@@ -127,6 +167,14 @@ std::string ParamTable::validate(const SimParams& p) {
     return "dt_min must not exceed dt_max";
   if (p.minIterations > p.maxIterations)
     return "min_iterations must not exceed max_iterations";
+  if (p.surfaceDistanceLo >= p.surfaceDistanceHi)
+    return "surface_distance_lo must be below surface_distance_hi";
+  if (p.vorticityLo >= p.vorticityHi)
+    return "vorticity_lo must be below vorticity_hi";
+  if (p.velocityDifferenceLo >= p.velocityDifferenceHi)
+    return "velocity_difference_lo must be below velocity_difference_hi";
+  if (!(p.mergeBelow < p.lightBelow && p.shareAbove < p.splitAbove))
+    return "the thresholds must keep merge_below < light_below <= 1 <= share_above < split_above";
   return {};
 }
 

@@ -28,11 +28,11 @@ class ParticleSet {
   std::vector<Real> kappaV;       ///< DFSPH divergence-solve stiffness, kept for warm start [m^2/s^2]
   std::vector<Real> splitTime;    ///< simulated time of the split that created the particle, -1 if none [s]
   std::vector<std::uint32_t> id;  ///< stable identifier, survives sorting
-  std::vector<std::uint32_t> flags;  ///< ParticleFlag bits
-  std::vector<Real> levelPhi;        ///< visible level R_phi in [0, 1] (0 at the surface), adaptivity
-  std::vector<Real> levelOmega;      ///< vorticity level R_omega in [1, Rmax] [-]
-  std::vector<Real> levelNu;         ///< velocity-difference level R_nu in [1, Rmax] [-]
-  std::vector<Real> mOpt;            ///< optimal (target) mass of the adaptivity [kg]
+  std::vector<std::uint32_t> flags;       ///< ParticleFlag bits
+  std::vector<Real> levelPhi;             ///< visible level R_phi in [0, 1] (0 at the surface), adaptivity
+  std::vector<Real> levelOmega;           ///< vorticity level R_omega in [1, Rmax] [-]
+  std::vector<Real> levelNu;              ///< velocity-difference level R_nu in [1, Rmax] [-]
+  std::vector<Real> mOpt;                 ///< optimal (target) mass of the adaptivity [kg]
   std::vector<std::uint32_t> heavySteps;  ///< consecutive adaptation steps found too heavy (split delay)
 
   /// number of particles

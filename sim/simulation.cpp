@@ -3,6 +3,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -50,6 +51,8 @@ PhaseTimes& PhaseTimes::operator+=(const PhaseTimes& o) {
   pressure += o.pressure;
   boundaries += o.boundaries;
   integrate += o.integrate;
+  levels += o.levels;
+  adaptation += o.adaptation;
   return *this;
 }
 
@@ -64,9 +67,10 @@ void RunStats::add(const StepStats& s, std::size_t particles) {
   divergenceIterations += std::uint64_t(s.divergenceIterations);
   neighborsSum += s.fluidNeighbors + s.boundaryNeighbors;
   times += s.times;
+  adaptivity += s.adaptivity;
 }
 
-Simulation::Simulation(const SceneDesc& scene) : m_scene(scene), m_params(scene.params) {
+Simulation::Simulation(const SceneDesc& scene) : m_scene(scene), m_params(scene.params), m_mode(scene.mode) {
   const std::string invalid = ParamTable::validate(m_params);
   if (!invalid.empty())
     throw InputError(scene.name + ": " + invalid);
@@ -96,6 +100,9 @@ Simulation::Simulation(const SceneDesc& scene) : m_scene(scene), m_params(scene.
   m_grid.sort(m_boundary.x.data(), m_boundary.staticCount(), m_order, m_staticCells);
   m_boundary.permute(0, m_order);
 
+  // The adaptive modes start from the coarsened lattice (createFluid); the band between fine and coarse is
+  // filled in by the first adaptation steps, gradually, as during the run. (Settling it before time starts,
+  // with supports set at once, left density errors of several percent.)
   createFluid();
   m_dt = Real(m_params.dtMax);
 }
@@ -105,6 +112,13 @@ void Simulation::createFluid() {
   const double d = 2.0 * r;
   const double rho0 = m_params.restDensity;
   m_latticeMass = Real(rho0 / latticeKernelSum(4.0 * r, d));
+  // Every mode starts from the same lattice of finest particles, so every mode holds the same water. The
+  // modes with coarse particles then merge cubic blocks of e^3 lattice points (e^3 <= mass ratio) into one
+  // particle, which on a lattice reproduces the rest density exactly.
+  const int edge =
+      m_mode == AdaptivityMode::UniformHigh ? 1 : std::max(1, int(std::cbrt(m_params.massRatio + 1e-6)));
+  std::vector<std::uint32_t> blockOf;
+  std::vector<std::uint32_t> blockSize;
   for (std::size_t b = 0; b < m_scene.fluid.size(); ++b) {
     const FluidBlock& block = m_scene.fluid[b];
     const std::size_t before = m_fluid.size();
@@ -119,6 +133,9 @@ void Simulation::createFluid() {
       start[k] = block.box.min()[k] + 0.5 * (extent[k] - count[k] * d) + 0.5 * d;
     }
     m_fluid.reserve(m_fluid.size() + std::size_t(count.prod()));
+    const Eigen::Vector3i blocks = (count.array() + edge - 1) / edge;
+    const std::size_t firstBlock = blockSize.size();
+    blockSize.resize(firstBlock + std::size_t(blocks.prod()), 0);
     for (int z = 0; z < count.z(); ++z)
       for (int y = 0; y < count.y(); ++y)
         for (int x = 0; x < count.x(); ++x) {
@@ -135,6 +152,10 @@ void Simulation::createFluid() {
           }
           if (!blocked) {
             m_fluid.add(p.cast<Real>(), block.velocity.cast<Real>(), m_latticeMass, m_support, Real(rho0));
+            const std::size_t key =
+                firstBlock + std::size_t(((z / edge) * blocks.y() + y / edge) * blocks.x() + x / edge);
+            blockOf.push_back(std::uint32_t(key));
+            ++blockSize[key];
           }
         }
     if (m_fluid.size() == before) {
@@ -148,6 +169,77 @@ void Simulation::createFluid() {
                        " lies outside the domain");
     }
   }
+  if (edge > 1)
+    coarsenInitialLattice(blockOf, blockSize, edge);
+}
+
+void Simulation::coarsenInitialLattice(const std::vector<std::uint32_t>& blockOf,
+                                       const std::vector<std::uint32_t>& blockSize, int edge) {
+  const std::uint32_t full = std::uint32_t(edge * edge * edge);
+  std::vector<std::uint8_t> merge(blockSize.size(), 1);
+  if (adaptive()) {
+    // only blocks whose every point may be that coarse: the target mass of each member allows the block's
+    // mass
+    searchNeighbors();
+    SolverContext ctx{m_fluid, m_boundary, m_fluidNbrs, m_boundaryNbrs, m_params};
+    m_solver.computeDensityAndFactor(ctx);
+    computeLevels(false);
+    const Real blockMass = Real(full) * m_latticeMass;
+    for (std::size_t k = 0; k < blockSize.size(); ++k)
+      merge[k] = blockSize[k] == full;
+    for (std::size_t i = 0; i < m_fluid.size(); ++i) {
+      // ids are the creation order, which indexes blockOf
+      if (blockMass > Real(m_params.shareAbove) * m_target[i])
+        merge[blockOf[m_fluid.id[i]]] = 0;
+    }
+  }
+  struct Sum {
+    double m = 0.0;
+    Vec3d mx = Vec3d::Zero();
+    Vec3d mv = Vec3d::Zero();
+  };
+  std::vector<Sum> sums(blockSize.size());
+  ParticleSet out;
+  out.reserve(m_fluid.size());
+  const Real rho0 = Real(m_params.restDensity);
+  for (std::size_t i = 0; i < m_fluid.size(); ++i) {
+    const std::uint32_t key = blockOf[m_fluid.id[i]];
+    if (!merge[key]) {
+      out.add(m_fluid.x[i], m_fluid.v[i], m_fluid.m[i], m_fluid.H[i], rho0);
+      continue;
+    }
+    Sum& sum = sums[key];
+    sum.m += double(m_fluid.m[i]);
+    sum.mx += double(m_fluid.m[i]) * m_fluid.x[i].cast<double>();
+    sum.mv += double(m_fluid.m[i]) * m_fluid.v[i].cast<double>();
+  }
+  const Real r = Real(m_params.particleRadius);
+  for (const Sum& sum : sums) {
+    if (sum.m <= 0.0)
+      continue;
+    const Real m = Real(sum.m);
+    out.add((sum.mx / sum.m).cast<Real>(), (sum.mv / sum.m).cast<Real>(), m,
+            supportForMass(m, m_latticeMass, r), rho0);
+  }
+  m_fluid = std::move(out);
+}
+
+void Simulation::computeLevels(bool smooth) {
+  m_levels.compute(m_fluid, m_fluidNbrs, m_boundaryNbrs, m_boundary, m_params, m_mode, m_latticeMass,
+                   m_target);
+  const Real mFine = m_latticeMass;
+  const Real mBase = baseMass();
+  const Real gamma = smooth ? Real(m_params.massSmoothing) : Real(1);
+  for (std::size_t i = 0; i < m_fluid.size(); ++i) {
+    const Real m = m_fluid.mOpt[i] + gamma * (m_target[i] - m_fluid.mOpt[i]);
+    m_fluid.mOpt[i] = std::clamp(m, mFine, std::max(mFine, mBase));
+  }
+}
+
+AdaptivityStats Simulation::adaptResolution(bool ignoreDelay) {
+  const AdaptContext ctx{m_fluid,  m_fluidNbrs,   m_boundaryNbrs, m_boundary, m_colliders,
+                         m_params, m_latticeMass, m_time,         m_stepCount};
+  return m_adaptivity.adapt(ctx, ignoreDelay);
 }
 
 void Simulation::setColliderPose(std::size_t collider, const Vec3d& position, const Quatd& orientation,
@@ -263,6 +355,14 @@ void Simulation::step() {
   st.densityError = m_solver.computeDensityAndFactor(ctx);
   auto t3 = Clock::now();
   st.times.density = seconds(t2, t3);
+  const bool adaptNow =
+      adaptive() && m_stepCount % std::uint64_t(std::max(1, m_params.adaptationPeriod)) == 0;
+  if (adaptNow) {
+    computeLevels(true);
+    const auto tl = Clock::now();
+    st.times.levels = seconds(t3, tl);
+    t3 = tl;
+  }
 
   if (m_params.divergenceSolve)
     st.divergenceIterations = m_solver.divergenceSolve(ctx, m_dt).iterations;
@@ -288,9 +388,16 @@ void Simulation::step() {
   m_boundaryImpulse += m_solver.boundaryImpulse() + double(dt) * m_solver.boundaryForce();
   integrateAndCheck(dt);
   m_time += double(dt);
-  ++m_stepCount;
   auto t8 = Clock::now();
   st.times.integrate = seconds(t5, t6) + seconds(t7, t8);
+  if (adaptive()) {
+    // the lists of this step's start still index the particles: nothing was reordered since
+    if (adaptNow)
+      st.adaptivity = adaptResolution(false);
+    Adaptivity::blendSupports(m_fluid, m_params, m_latticeMass);
+    st.times.adaptation = seconds(t8, Clock::now());
+  }
+  ++m_stepCount;
   st.dt = dt;
   m_last = st;
   m_run.add(st, n);
@@ -304,7 +411,8 @@ double Simulation::pressure(std::size_t i) const {
 }
 
 std::size_t Simulation::memoryBytes() const {
-  return m_fluid.memoryBytes() + m_boundary.memoryBytes() + m_fluidNbrs.memoryBytes() +
+  return m_fluid.memoryBytes() + m_boundary.memoryBytes() + m_levels.memoryBytes() +
+         m_adaptivity.memoryBytes() + m_target.capacity() * sizeof(Real) + m_fluidNbrs.memoryBytes() +
          m_boundaryNbrs.memoryBytes() + m_search.memoryBytes() + m_solver.memoryBytes() +
          (m_order.capacity() + m_fluidCells.capacity() + m_staticCells.capacity() +
           m_kinematicCells.capacity()) *

@@ -7,8 +7,10 @@
 #include <cstdint>
 #include <vector>
 
+#include "sim/adaptivity.h"
 #include "sim/boundary_set.h"
 #include "sim/dfsph_solver.h"
+#include "sim/levels.h"
 #include "sim/neighbor_search.h"
 #include "sim/particle_set.h"
 #include "sim/scene.h"
@@ -24,9 +26,12 @@ struct PhaseTimes {
   double pressure = 0;    ///< constant-density solve
   double boundaries = 0;  ///< collider poses and kinematic boundary particles
   double integrate = 0;   ///< time step, integration and checks
+  double levels = 0;      ///< surface distance, vorticity, velocity difference and optimal masses
+  double adaptation = 0;  ///< split, merge, share and support blending
   /// sum of all phases
   double total() const {
-    return neighbors + density + divergence + viscosity + pressure + boundaries + integrate;
+    return neighbors + density + divergence + viscosity + pressure + boundaries + integrate + levels +
+           adaptation;
   }
   PhaseTimes& operator+=(const PhaseTimes& o);
 };
@@ -41,6 +46,7 @@ struct StepStats {
   double fluidNeighbors = 0;      ///< mean fluid neighbours per particle
   double boundaryNeighbors = 0;   ///< mean boundary neighbours per particle
   PhaseTimes times;               ///< wall time by phase
+  AdaptivityStats adaptivity;     ///< splits, merges and redistributions of this step
 };
 
 /// Figures accumulated over many steps.
@@ -55,6 +61,7 @@ struct RunStats {
   std::uint64_t divergenceIterations = 0;  ///< total divergence iterations
   double neighborsSum = 0;                 ///< sum of mean (fluid + boundary) neighbours per step
   PhaseTimes times;                        ///< wall time by phase
+  AdaptivityStats adaptivity;              ///< splits, merges and redistributions
   /// add one step
   void add(const StepStats& s, std::size_t particles);
 };
@@ -110,11 +117,25 @@ class Simulation {
   Vec3d totalMomentum() const { return m_fluid.totalMomentum(); }
   /// bytes held by particles, boundaries, grid, neighbour lists and solver scratch
   std::size_t memoryBytes() const;
-  /// mass of a fluid particle on the initial lattice [kg]
+  /// mass of a fluid particle on the initial lattice, the finest mass m_fine [kg]
   Real latticeMass() const { return m_latticeMass; }
+  /// the coarsest mass m_base = mass_ratio * m_fine [kg]
+  Real baseMass() const { return Real(m_params.massRatio) * m_latticeMass; }
+  /// resolution mode
+  AdaptivityMode mode() const { return m_mode; }
+  /// true when the resolution changes during the run (surface and fluidplaying modes)
+  bool adaptive() const {
+    return m_mode == AdaptivityMode::Surface || m_mode == AdaptivityMode::FluidPlaying;
+  }
+  /// the level estimator, with phi, omega and nu of the last adaptation step
+  const LevelEstimator& levels() const { return m_levels; }
 
  private:
   void createFluid();
+  void coarsenInitialLattice(const std::vector<std::uint32_t>& blockOf,
+                             const std::vector<std::uint32_t>& blockSize, int blockEdge);
+  void computeLevels(bool smooth);
+  AdaptivityStats adaptResolution(bool ignoreDelay);
   void updateColliders();
   void searchNeighbors();
   void integrateAndCheck(Real dt);
@@ -133,6 +154,10 @@ class Simulation {
   std::vector<std::uint32_t> m_staticCells;
   std::vector<std::uint32_t> m_kinematicCells;
   DfsphSolver m_solver;
+  AdaptivityMode m_mode = AdaptivityMode::UniformHigh;
+  LevelEstimator m_levels;
+  Adaptivity m_adaptivity;
+  std::vector<Real> m_target;
   Real m_support = 0;
   Real m_latticeMass = 0;
   Real m_dt = 0;

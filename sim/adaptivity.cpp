@@ -1,0 +1,326 @@
+#include "sim/adaptivity.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "sim/boundary_sampling.h"
+#include "sim/kernels.h"
+#include "sim/levels.h"
+#include "sim/split_templates.h"
+
+namespace fp::sim {
+
+namespace {
+
+std::uint64_t splitmix(std::uint64_t x) {
+  x += 0x9e3779b97f4a7c15ull;
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
+  return x ^ (x >> 31);
+}
+
+double uniform01(std::uint64_t& state) {
+  state = splitmix(state);
+  return double(state >> 11) * (1.0 / 9007199254740992.0);
+}
+
+/// Candidate k of a split: the identity for k = 0 (the unrotated template), else a uniformly random rotation
+/// (Shoemake 1992) drawn from the seed, the parent's id and the step, so runs are reproducible.
+Quatd candidateRotation(std::uint64_t seed, std::uint32_t id, std::uint64_t step, int k) {
+  if (k == 0)
+    return Quatd::Identity();
+  std::uint64_t state = splitmix(seed ^ splitmix(std::uint64_t(id) << 20 ^ step) ^ std::uint64_t(k) << 56);
+  const double u1 = uniform01(state);
+  const double u2 = 2.0 * kPi * uniform01(state);
+  const double u3 = 2.0 * kPi * uniform01(state);
+  const double a = std::sqrt(1.0 - u1);
+  const double b = std::sqrt(u1);
+  return Quatd(b * std::cos(u3), a * std::sin(u2), a * std::cos(u2), b * std::sin(u3)).normalized();
+}
+
+int childCount(Real q, const SimParams& params) {
+  const int nMax = std::min(params.splitMaxChildren, SplitTemplates::kMaxChildren);
+  // a tiny tolerance keeps q = 3 (to round-off) at three children
+  const int n = int(std::ceil(double(q) - 1e-4));
+  return std::clamp(n, SplitTemplates::kMinChildren, nMax);
+}
+
+}  // namespace
+
+AdaptivityStats& AdaptivityStats::operator+=(const AdaptivityStats& o) {
+  splits += o.splits;
+  children += o.children;
+  merges += o.merges;
+  redistributions += o.redistributions;
+  splitsBlocked += o.splitsBlocked;
+  splitsCompared += o.splitsCompared;
+  splitErrorChosen += o.splitErrorChosen;
+  splitErrorUnrotated += o.splitErrorUnrotated;
+  return *this;
+}
+
+std::vector<Vec3> Adaptivity::childPositions(const AdaptContext& ctx, std::size_t o, int n, int candidate) {
+  const ParticleSet& p = ctx.fluid;
+  const double radius = ctx.params.particleRadius * std::cbrt(double(p.m[o]) / double(ctx.mFine));
+  const Quatd rot = candidateRotation(ctx.params.seed, p.id[o], ctx.step, candidate);
+  const Vec3d centre = p.x[o].cast<double>();
+  std::vector<Vec3> x;
+  x.reserve(std::size_t(n));
+  for (const Vec3d& offset : SplitTemplates::get().offsets(n))
+    x.push_back((centre + radius * (rot * offset)).cast<Real>());
+  return x;
+}
+
+double Adaptivity::splitError(const AdaptContext& ctx, std::size_t o, const std::vector<Vec3>& children) {
+  const ParticleSet& p = ctx.fluid;
+  const Real rho0 = Real(ctx.params.restDensity);
+  const Real Vo = p.m[o] / rho0;
+  const Real Vs = Vo / Real(children.size());
+  const Real Ho = p.H[o];
+  const Real Hs = supportForMass(p.m[o] / Real(children.size()), ctx.mFine, Real(ctx.params.particleRadius));
+  const Real Hb = ctx.boundary.support();
+  double e = 0.0;
+  // tau_j: the neighbours' density change
+  for (std::uint32_t k = ctx.fluidNbrs.offsets[o]; k < ctx.fluidNbrs.offsets[o + 1]; ++k) {
+    const std::uint32_t j = ctx.fluidNbrs.indices[k];
+    double tau = -double(Vo) * CubicSpline::w((p.x[j] - p.x[o]).norm(), pairSupport(p.H[j], Ho));
+    const Real Hjs = pairSupport(p.H[j], Hs);
+    for (const Vec3& xs : children)
+      tau += double(Vs) * CubicSpline::w((p.x[j] - xs).norm(), Hjs);
+    e += tau * tau;
+  }
+  // tau_s: the children's density error against the parent's density
+  const double target = double(p.rho[o]) / double(rho0);
+  for (const Vec3& xs : children) {
+    double rho = 0.0;
+    for (const Vec3& xt : children)
+      rho += double(Vs) * CubicSpline::w((xs - xt).norm(), Hs);
+    for (std::uint32_t k = ctx.fluidNbrs.offsets[o]; k < ctx.fluidNbrs.offsets[o + 1]; ++k) {
+      const std::uint32_t j = ctx.fluidNbrs.indices[k];
+      rho += double(p.m[j] / rho0) * CubicSpline::w((xs - p.x[j]).norm(), pairSupport(Hs, p.H[j]));
+    }
+    const Real Hsb = pairSupport(Hs, Hb);
+    const double sb = double(Hsb / Hb);
+    for (std::uint32_t k = ctx.boundaryNbrs.offsets[o]; k < ctx.boundaryNbrs.offsets[o + 1]; ++k) {
+      const std::uint32_t b = ctx.boundaryNbrs.indices[k];
+      rho += sb * double(ctx.boundary.psi[b]) * CubicSpline::w((xs - ctx.boundary.x[b]).norm(), Hsb);
+    }
+    const double tau = rho - target;
+    e += tau * tau;
+  }
+  return e;
+}
+
+void Adaptivity::planSplit(const AdaptContext& ctx, SplitPlan& plan) const {
+  const ParticleSet& p = ctx.fluid;
+  const std::size_t o = plan.parent;
+  // colliders near the parent: only they can hold a child
+  std::vector<std::uint16_t> near;
+  for (std::uint32_t k = ctx.boundaryNbrs.offsets[o]; k < ctx.boundaryNbrs.offsets[o + 1]; ++k) {
+    const std::uint16_t c = ctx.boundary.collider[ctx.boundaryNbrs.indices[k]];
+    if (std::find(near.begin(), near.end(), c) == near.end())
+      near.push_back(c);
+  }
+  const double childRadius =
+      ctx.params.particleRadius * std::cbrt(double(p.m[o]) / double(plan.n) / double(ctx.mFine));
+  auto valid = [&](const std::vector<Vec3>& children) {
+    for (std::uint16_t c : near) {
+      const ColliderState& col = ctx.colliders[c];
+      const Quatd toLocal = col.orientation.conjugate();
+      for (const Vec3& xs : children) {
+        // a child must keep one of its own spacings from the wall surface
+        if (signedDistanceLocal(col.desc, toLocal * (xs.cast<double>() - col.position)) < 2.0 * childRadius)
+          return false;
+      }
+    }
+    return true;
+  };
+  const int candidates = std::max(1, ctx.params.orientationCandidates);
+  plan.chosen = -1;
+  plan.errorUnrotated = -1.0;
+  for (int k = 0; k < candidates; ++k) {
+    const std::vector<Vec3> children = childPositions(ctx, o, plan.n, k);
+    if (!valid(children))
+      continue;
+    const double e = splitError(ctx, o, children);
+    if (k == 0)
+      plan.errorUnrotated = e;
+    if (plan.chosen < 0 || e < plan.errorChosen) {
+      plan.chosen = k;
+      plan.errorChosen = e;
+    }
+  }
+}
+
+bool Adaptivity::transferMass(const AdaptContext& ctx, std::size_t donor, double amount, bool all) {
+  ParticleSet& p = ctx.fluid;
+  const SimParams& params = ctx.params;
+  m_candidates.clear();
+  double capacity = 0.0;
+  for (std::uint32_t k = ctx.fluidNbrs.offsets[donor]; k < ctx.fluidNbrs.offsets[donor + 1]; ++k) {
+    const std::uint32_t j = ctx.fluidNbrs.indices[k];
+    if (m_locked[j] || m_removed[j])
+      continue;
+    if (p.m[j] >= Real(params.lightBelow) * p.mOpt[j])
+      continue;
+    const Real distance = (p.x[j] - p.x[donor]).norm();
+    if (distance >= pairSupport(p.H[j], p.H[donor]))
+      continue;
+    m_candidates.emplace_back(distance, j);
+    capacity += std::min(double(p.mOpt[j]) - double(p.m[j]), params.transferRate * double(p.m[j]));
+  }
+  if (m_candidates.empty() || capacity <= 0.0 || (all && capacity < amount))
+    return false;
+  // nearest receivers first, each filled up to its optimal mass
+  std::sort(m_candidates.begin(), m_candidates.end());
+  double left = amount;
+  const double mDonor = p.m[donor];
+  const Vec3d xDonor = p.x[donor].cast<double>();
+  const Vec3d vDonor = p.v[donor].cast<double>();
+  for (const auto& [distance, j] : m_candidates) {
+    if (left <= 0.0)
+      break;
+    // Each receiver grows by at most `transfer_rate` of its mass per step: a particle whose mass jumps (say
+    // doubles) carries a density error of the same order that the pressure solve must undo in one step. A
+    // merge thus spreads its donor over several receivers, or waits for a step where they have room. (Letting
+    // donors shrink over several steps instead leaves tiny particles with lagging supports that get shot
+    // out.)
+    const double room = std::min(double(p.mOpt[j]) - double(p.m[j]), params.transferRate * double(p.m[j]));
+    // a merge hands its last receiver the exact remainder, so no sliver of mass is left behind by round-off
+    const double give = all && room >= left * (1.0 - 1e-9) ? left : std::min(room, left);
+    if (give <= 0.0)
+      continue;
+    left -= give;
+    const double mj = p.m[j];
+    const double total = mj + give;
+    // The received mass brings its momentum. A merge also brings its position (the donor vanishes, its centre
+    // of mass stays); a share leaves the receiver in place, or a heavy donor would pull its receivers onto
+    // itself.
+    if (all)
+      p.x[j] = ((mj * p.x[j].cast<double>() + give * xDonor) / total).cast<Real>();
+    p.v[j] = ((mj * p.v[j].cast<double>() + give * vDonor) / total).cast<Real>();
+    p.m[j] = Real(total);
+    m_locked[j] = 1;
+  }
+  const double given = amount - std::max(0.0, left);
+  m_locked[donor] = 1;
+  if (all && left <= 0.0) {
+    m_removed[donor] = 1;
+    return true;
+  }
+  p.m[donor] = Real(mDonor - given);
+  return !all && given > 0.0;
+}
+
+AdaptivityStats Adaptivity::adapt(const AdaptContext& ctx, bool ignoreDelay) {
+  ParticleSet& p = ctx.fluid;
+  const SimParams& params = ctx.params;
+  const std::size_t n = p.size();
+  AdaptivityStats stats;
+  m_locked.assign(n, 0);
+  m_removed.assign(n, 0);
+
+  auto ratio = [&](std::size_t i) { return p.m[i] / p.mOpt[i]; };
+  for (std::size_t i = 0; i < n; ++i)
+    p.heavySteps[i] = ratio(i) >= Real(params.splitAbove) ? p.heavySteps[i] + 1 : 0;
+
+  // merge n:(n-1): a too-light particle goes into its nearest light neighbours
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!m_locked[i] && ratio(i) < Real(params.mergeBelow) && transferMass(ctx, i, p.m[i], true))
+      ++stats.merges;
+  }
+
+  // split 1:n, orientations chosen in parallel on the state before any split of this step
+  m_plans.clear();
+  for (std::size_t i = 0; i < n; ++i) {
+    if (m_locked[i] || ratio(i) < Real(params.splitAbove))
+      continue;
+    if (!ignoreDelay && p.heavySteps[i] < std::uint32_t(params.splitDelay))
+      continue;
+    SplitPlan plan;
+    plan.parent = i;
+    plan.n = childCount(ratio(i), params);
+    m_plans.push_back(plan);
+  }
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m_plans.size(), 4),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t k = r.begin(); k < r.end(); ++k)
+                        planSplit(ctx, m_plans[k]);
+                    });
+  for (const SplitPlan& plan : m_plans) {
+    if (plan.chosen < 0) {
+      ++stats.splitsBlocked;
+      continue;
+    }
+    const std::size_t o = plan.parent;
+    const std::vector<Vec3> children = childPositions(ctx, o, plan.n, plan.chosen);
+    const double mParent = p.m[o];
+    const Real mChild = Real(mParent / plan.n);
+    for (int s = 0; s < plan.n; ++s) {
+      // the last child takes the remainder, so the children's masses sum to the parent's to round-off
+      const Real m = s + 1 < plan.n ? mChild : Real(mParent - double(mChild) * (plan.n - 1));
+      // children start with the parent's support and blend to their own (Adaptivity::blendSupports)
+      const std::size_t c = p.add(children[std::size_t(s)], p.v[o], m, p.H[o], p.rho[o]);
+      p.a[c] = p.a[o];
+      p.kappa[c] = p.kappa[o];
+      p.kappaV[c] = p.kappaV[o];
+      p.splitTime[c] = Real(ctx.time);
+      p.flags[c] = kFlagSplit | (p.flags[o] & kFlagSurface);
+      p.levelPhi[c] = p.levelPhi[o];
+      p.levelOmega[c] = p.levelOmega[o];
+      p.levelNu[c] = p.levelNu[o];
+      p.mOpt[c] = p.mOpt[o];
+    }
+    m_removed[o] = 1;
+    m_locked[o] = 1;
+    ++stats.splits;
+    stats.children += std::uint64_t(plan.n);
+    if (plan.errorUnrotated >= 0.0) {
+      ++stats.splitsCompared;
+      stats.splitErrorChosen += plan.errorChosen;
+      stats.splitErrorUnrotated += plan.errorUnrotated;
+    }
+  }
+
+  // share: a heavy particle gives half its excess to light neighbours
+  for (std::size_t i = 0; i < n; ++i) {
+    if (m_locked[i] || ratio(i) < Real(params.shareAbove))
+      continue;
+    if (transferMass(ctx, i, 0.5 * (double(p.m[i]) - double(p.mOpt[i])), false))
+      ++stats.redistributions;
+  }
+
+  if (stats.merges + stats.splits > 0) {
+    m_keep.clear();
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      if (i >= n || !m_removed[i])
+        m_keep.push_back(std::uint32_t(i));
+    }
+    p.permute(m_keep);
+  }
+  return stats;
+}
+
+void Adaptivity::blendSupports(ParticleSet& p, const SimParams& params, Real mFine) {
+  const Real r = Real(params.particleRadius);
+  const Real keep = params.supportBlendSteps > 0 ? Real(std::exp(-3.0 / params.supportBlendSteps)) : Real(0);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, p.size(), 4096),
+                    [&](const tbb::blocked_range<std::size_t>& rg) {
+                      for (std::size_t i = rg.begin(); i < rg.end(); ++i) {
+                        const Real target = supportForMass(p.m[i], mFine, r);
+                        Real h = target + (p.H[i] - target) * keep;
+                        if (std::abs(h - target) < Real(1e-3) * target)
+                          h = target;
+                        p.H[i] = h;
+                      }
+                    });
+}
+
+std::size_t Adaptivity::memoryBytes() const {
+  return m_locked.capacity() + m_removed.capacity() + m_plans.capacity() * sizeof(SplitPlan) +
+         m_keep.capacity() * sizeof(std::uint32_t) + m_candidates.capacity() * sizeof(m_candidates[0]);
+}
+
+}  // namespace fp::sim

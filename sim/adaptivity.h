@@ -1,0 +1,90 @@
+#pragma once
+/// Changing the resolution (METHOD.md section 5, after Winchenbach et al. 2017 "Infinite continuous
+/// adaptivity for incompressible SPH"): particles far heavier than their optimal mass split 1:n on a template
+/// turned to the orientation of least density error (Winchenbach & Kolb 2021), particles far lighter merge
+/// into neighbours, heavy ones share mass with light neighbours, and support radii follow the new masses over
+/// a few steps. Every operation conserves total mass and linear momentum to round-off.
+
+#include <cstdint>
+#include <vector>
+
+#include "sim/boundary_set.h"
+#include "sim/neighbor_search.h"
+#include "sim/params.h"
+#include "sim/particle_set.h"
+
+namespace fp::sim {
+
+/// Counts and errors of the adaptation, accumulated.
+struct AdaptivityStats {
+  std::uint64_t splits = 0;           ///< particles split
+  std::uint64_t children = 0;         ///< particles created by splits
+  std::uint64_t merges = 0;           ///< particles removed by merging into neighbours
+  std::uint64_t redistributions = 0;  ///< mass shares from a heavy particle to light neighbours
+  std::uint64_t splitsBlocked = 0;    ///< splits postponed because every orientation put a child in a wall
+  std::uint64_t splitsCompared = 0;   ///< splits where the unrotated template was valid too
+  double splitErrorChosen = 0.0;      ///< sum over compared splits of E of the chosen orientation [-]
+  double splitErrorUnrotated = 0.0;   ///< sum over compared splits of E of the unrotated template [-]
+
+  /// 1 - mean E(chosen) / mean E(unrotated): the density error decrease by the orientation choice [-]
+  double splitErrorReduction() const {
+    return splitErrorUnrotated > 0.0 ? 1.0 - splitErrorChosen / splitErrorUnrotated : 0.0;
+  }
+  /// adds another set of counts
+  AdaptivityStats& operator+=(const AdaptivityStats& o);
+};
+
+/// What one adaptation step may touch.
+struct AdaptContext {
+  ParticleSet& fluid;                           ///< fluid particles, changed in place
+  const NeighborList& fluidNbrs;                ///< fluid neighbours (from the start of the step)
+  const NeighborList& boundaryNbrs;             ///< boundary neighbours (from the start of the step)
+  const BoundarySet& boundary;                  ///< boundary particles
+  const std::vector<ColliderState>& colliders;  ///< current collider poses (children never land in one)
+  const SimParams& params;                      ///< thresholds and template settings
+  Real mFine;                                   ///< finest mass [kg]
+  double time;                                  ///< simulated time, stamped on split children [s]
+  std::uint64_t step;                           ///< step index, part of the orientation seed
+};
+
+/// Split, merge, share and support blending, with their scratch arrays.
+class Adaptivity {
+ public:
+  /// Runs one adaptation step on particles whose optimal mass `mOpt` is set: merges too-light particles,
+  /// splits too-heavy ones (after `split_delay` adaptation steps, or at once when `ignoreDelay`), shares mass
+  /// from heavy to light ones. A particle takes part in one operation per step. Returns this step's counts.
+  AdaptivityStats adapt(const AdaptContext& ctx, bool ignoreDelay);
+
+  /// Moves every support radius towards the one of its mass, 4 r (m / m_fine)^(1/3), over
+  /// `support_blend_steps` steps, so that densities do not jump after a split or a merge.
+  static void blendSupports(ParticleSet& p, const SimParams& params, Real mFine);
+
+  /// Split error E (METHOD.md section 5) of placing the children of particle `o` at `children` (each of
+  /// mass m_o / n), with the neighbourhood of the context [-]
+  static double splitError(const AdaptContext& ctx, std::size_t o, const std::vector<Vec3>& children);
+
+  /// bytes held
+  std::size_t memoryBytes() const;
+
+ private:
+  struct SplitPlan {
+    std::size_t parent = 0;
+    int n = 0;
+    int chosen = -1;  // candidate index, -1 when every candidate puts a child in a wall
+    double errorChosen = 0.0;
+    double errorUnrotated = -1.0;  // -1 when the unrotated template is not valid
+  };
+  void planSplit(const AdaptContext& ctx, SplitPlan& plan) const;
+  static std::vector<Vec3> childPositions(const AdaptContext& ctx, std::size_t o, int n, int candidate);
+  /// moves up to `amount` of the donor's mass and momentum to its light neighbours; with `all` the donor is
+  /// removed once all its mass is given. True for a completed merge (all) or any share (!all).
+  bool transferMass(const AdaptContext& ctx, std::size_t donor, double amount, bool all);
+
+  std::vector<std::uint8_t> m_locked;
+  std::vector<std::uint8_t> m_removed;
+  std::vector<SplitPlan> m_plans;
+  std::vector<std::uint32_t> m_keep;
+  std::vector<std::pair<Real, std::uint32_t>> m_candidates;
+};
+
+}  // namespace fp::sim

@@ -1,0 +1,60 @@
+#pragma once
+/// The three levels of the FluidPlaying paper and the optimal mass (METHOD.md section 4): the distance to the
+/// free surface phi (cone surface detector of Winchenbach et al. 2017, then distance propagated through the
+/// neighbours), the vorticity magnitude omega and the velocity difference nu, each mapped through a user
+/// interval, combined into m_opt = m_fine + R_phi / (R_omega R_nu) (m_base - m_fine).
+
+#include <vector>
+
+#include "sim/boundary_set.h"
+#include "sim/neighbor_search.h"
+#include "sim/params.h"
+#include "sim/particle_set.h"
+#include "sim/scene.h"
+
+namespace fp::sim {
+
+/// s(x) = clamp((x - lo) / (hi - lo), 0, 1); lo < hi
+double levelRamp(double x, double lo, double hi);
+/// visible level R_phi = s(phi) in [0, 1]: 0 at the surface (finest), 1 deep inside (coarsest)
+double visibleLevel(double phi, double lo, double hi);
+/// vorticity or velocity-difference level 1 + (rmax - 1) s(x) in [1, rmax]
+double refinementLevel(double x, double lo, double hi, double rmax);
+/// m_opt = m_fine + R_phi / (R_omega R_nu) (m_base - m_fine) [kg]
+double optimalMass(double rPhi, double rOmega, double rNu, double mFine, double mBase);
+/// support radius of a particle of mass m: 4 r_fine (m / m_fine)^(1/3), so that particles of every mass keep
+/// the same number of neighbours on their own lattice [m]
+Real supportForMass(Real m, Real mFine, Real fineRadius);
+
+/// Computes the levels of every particle. Owns its scratch arrays.
+class LevelEstimator {
+ public:
+  /// Fills flags (kFlagSurface), levelPhi, levelOmega, levelNu of `p` and the unsmoothed optimal mass of
+  /// every particle into `target`, from the neighbour lists and densities of the current step. `mFine` is the
+  /// finest mass [kg].
+  void compute(ParticleSet& p, const NeighborList& fluidNbrs, const NeighborList& boundaryNbrs,
+               const BoundarySet& boundary, const SimParams& params, AdaptivityMode mode, Real mFine,
+               std::vector<Real>& target);
+
+  /// distance to the free surface of the last compute, capped at surface_distance_hi [m]
+  const std::vector<Real>& surfaceDistance() const { return m_phi; }
+  /// vorticity magnitude of the last compute [1/s] (zero in the surface mode)
+  const std::vector<Real>& vorticity() const { return m_omega; }
+  /// velocity difference of the last compute [m/s] (zero in the surface mode)
+  const std::vector<Real>& velocityDifference() const { return m_nu; }
+  /// bytes held
+  std::size_t memoryBytes() const;
+
+ private:
+  void detectSurface(ParticleSet& p, const NeighborList& fluidNbrs, const NeighborList& boundaryNbrs,
+                     const BoundarySet& boundary);
+  void propagateDistance(const ParticleSet& p, const NeighborList& fluidNbrs, Real cap, Real hop);
+  void vorticityAndVelocityDifference(const ParticleSet& p, const NeighborList& fluidNbrs);
+
+  std::vector<Real> m_phi;
+  std::vector<Real> m_phiNext;
+  std::vector<Real> m_omega;
+  std::vector<Real> m_nu;
+};
+
+}  // namespace fp::sim
