@@ -577,7 +577,8 @@ void FluidRenderer::drawLegend() {
   };
   const char* title = colorFieldLabel(r.legendField);
   const float pad = 8.0f * scale, barH = 12.0f * scale, line = 10.0f * scale;
-  const float barW = std::max(160.0f, float(stb_easy_font_width(const_cast<char*>(title)))) * scale;
+  const float barW = std::min(std::max(160.0f, float(stb_easy_font_width(const_cast<char*>(title)))) * scale,
+                              float(r.width) - 4.0f * pad);
   const float x0 = pad, y0 = float(r.height) - pad - (barH + 2.0f * line + 2.0f * pad);
   const Eigen::Vector4f white(1.0f, 1.0f, 1.0f, 1.0f);
   quad(x0, y0, x0 + barW + 2.0f * pad, float(r.height) - pad, Eigen::Vector4f(0.0f, 0.0f, 0.0f, 0.55f), -1,

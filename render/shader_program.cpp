@@ -23,6 +23,8 @@ std::string defaultShaderDir() {
 
 namespace {
 
+constexpr int kFileLineStride = 100000;
+
 std::string readFile(const fs::path& path, const std::string& includedFrom) {
   std::ifstream in(path, std::ios::binary);
   if (!in) {
@@ -34,8 +36,10 @@ std::string readFile(const fs::path& path, const std::string& includedFrom) {
   return text.str();
 }
 
-// Appends `path` to `out` with its includes expanded; `#line` directives keep the driver's line numbers
-// pointing into the right file. GLSL 3.30 numbers the line after `#line N` as N.
+// Appends `path` to `out` with its includes expanded. `#line` directives keep the driver's line numbers
+// pointing into the right file: file k's lines are numbered from k * kFileLineStride, because drivers differ
+// in reporting the source-string number (Mesa always says 0). GLSL 3.30 numbers the line after `#line N` as
+// N.
 void expand(const fs::path& path, const std::string& includedFrom, ShaderSource& out, int depth) {
   if (depth > 8)
     throw ShaderError(path.string() + ": includes nested too deeply");
@@ -50,10 +54,10 @@ void expand(const fs::path& path, const std::string& includedFrom, ShaderSource&
     std::smatch match;
     if (std::regex_match(line, match, includeLine)) {
       const int child = int(out.files.size());
-      out.text += "#line 1 " + std::to_string(child) + "\n";
+      out.text += "#line " + std::to_string(child * kFileLineStride + 1) + "\n";
       expand(path.parent_path() / match[1].str(), path.string() + ":" + std::to_string(lineNumber), out,
              depth + 1);
-      out.text += "#line " + std::to_string(lineNumber + 1) + " " + std::to_string(fileIndex) + "\n";
+      out.text += "#line " + std::to_string(fileIndex * kFileLineStride + lineNumber + 1) + "\n";
     } else {
       out.text += line + "\n";
     }
@@ -104,9 +108,10 @@ std::string formatShaderLog(const std::string& log, const std::vector<std::strin
     std::smatch m;
     if (std::regex_match(line, m, mesa) || std::regex_match(line, m, nvidia) ||
         std::regex_match(line, m, generic)) {
-      const std::size_t file = std::size_t(std::stoul(m[1].str()));
-      const std::string path = file < files.size() ? files[file] : "<string " + m[1].str() + ">";
-      out += path + ":" + m[2].str() + ": " + m[3].str() + "\n";
+      const long number = std::stol(m[2].str());
+      const std::size_t file = std::size_t(number / kFileLineStride);
+      const std::string path = file < files.size() ? files[file] : "<file " + std::to_string(file) + ">";
+      out += path + ":" + std::to_string(number % kFileLineStride) + ": " + m[3].str() + "\n";
     } else if (!line.empty()) {
       out += line + "\n";
     }

@@ -14,16 +14,17 @@ namespace fp::render {
 /// source tree's.
 std::string defaultShaderDir();
 
-/// A shader's text with includes expanded; files[k] is the path of GLSL source-string number k.
+/// A shader's text with includes expanded; the lines of files[k] are numbered from k * 100000 + 1.
 struct ShaderSource {
   std::string text;                ///< ready for glShaderSource
-  std::vector<std::string> files;  ///< path of each source-string number used in `#line` directives
+  std::vector<std::string> files;  ///< the main file, then each included file
 };
 
 /// Reads `dir/name` and expands its includes. Throws ShaderError naming the file when one is missing.
 ShaderSource loadShaderSource(const std::string& dir, const std::string& name);
 
-/// Rewrites a driver's info log (Mesa `0:12(5): error`, NVIDIA `0(12) : error`) as `path:12: error` lines.
+/// Rewrites a driver's info log (Mesa `0:12(5): error`, NVIDIA `0(12) : error`) as `path:12: error` lines,
+/// `files` being the ShaderSource's.
 std::string formatShaderLog(const std::string& log, const std::vector<std::string>& files);
 
 /// A linked vertex + fragment program with cached uniform locations.
