@@ -56,6 +56,55 @@ TEST(CliTest, RejectsBadInput) {
   }
 }
 
+TEST(CliTest, ParsesTheModeAndRejectsUnknownModes) {
+  EXPECT_EQ(parseCommandLine({"--mode", "fluidplaying"}).mode, "fluidplaying");
+  EXPECT_EQ(parseCommandLine({"--mode", "uniform-low"}).mode, "uniform-low");
+  EXPECT_TRUE(parseCommandLine({}).mode.empty());  // the scene's mode
+  EXPECT_THROW(parseCommandLine({"--mode", "adaptive"}), std::invalid_argument);
+  EXPECT_THROW(parseCommandLine({"--mode"}), std::invalid_argument);
+  try {
+    parseCommandLine({"--mode", "adaptive"});
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("uniform-low"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(runExe("--headless --mode adaptive"), kExitUsage);
+}
+
+TEST(CliTest, ParsesRenderOptions) {
+  const CliOptions o =
+      parseCommandLine({"--render", "--out", "img", "--width", "640", "--height", "360", "--color", "speed",
+                        "--highlight-time", "0.25", "--no-spray", "--shaders", "sh"});
+  EXPECT_TRUE(o.render);
+  EXPECT_TRUE(o.headless);  // --render implies it
+  EXPECT_EQ(o.outDir, "img");
+  EXPECT_EQ(o.width, 640);
+  EXPECT_EQ(o.height, 360);
+  EXPECT_EQ(o.view, "particles");  // --color implies the particle view
+  EXPECT_EQ(o.colorField, "speed");
+  EXPECT_DOUBLE_EQ(o.highlightTime.value(), 0.25);
+  EXPECT_TRUE(o.noSpray);
+  EXPECT_EQ(o.shaderDir, "sh");
+  const CliOptions d = parseCommandLine({"--headless", "--render", "--out", "img"});
+  EXPECT_EQ(d.width, 1280);
+  EXPECT_EQ(d.height, 720);
+  EXPECT_EQ(d.view, "fluid");
+  EXPECT_FALSE(parseCommandLine({}).render);
+}
+
+TEST(CliTest, RejectsBadRenderOptions) {
+  EXPECT_THROW(parseCommandLine({"--render"}), std::invalid_argument);        // no --out
+  EXPECT_THROW(parseCommandLine({"--out", "img"}), std::invalid_argument);    // no --render
+  EXPECT_THROW(parseCommandLine({"--width", "640"}), std::invalid_argument);  // no --render
+  EXPECT_THROW(parseCommandLine({"--render", "--out", "i", "--width", "8"}), std::invalid_argument);
+  EXPECT_THROW(parseCommandLine({"--render", "--out", "i", "--height", "1e5"}), std::invalid_argument);
+  EXPECT_THROW(parseCommandLine({"--render", "--out", "i", "--view", "wire"}), std::invalid_argument);
+  EXPECT_THROW(parseCommandLine({"--render", "--out", "i", "--color", "mood"}), std::invalid_argument);
+  EXPECT_THROW(parseCommandLine({"--render", "--out", "i", "--view", "fluid", "--color", "nu"}),
+               std::invalid_argument);
+  EXPECT_THROW(parseCommandLine({"--render", "--out", "i", "--highlight-time", "-1"}), std::invalid_argument);
+  EXPECT_EQ(runExe("--headless --render"), kExitUsage);
+}
+
 TEST(CliTest, ExitCodesOfTheExecutable) {
   EXPECT_EQ(runExe("--help"), kExitOk);
   EXPECT_EQ(runExe("--no-such-flag"), kExitUsage);
