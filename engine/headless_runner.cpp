@@ -54,13 +54,14 @@ RunSummary runHeadless(const CliOptions& options, std::ostream& out, std::ostrea
   sim::Simulation simulation(scene);
   RunSummary s;
   s.scene = options.scenePath;
+  s.mode = sim::modeName(scene.mode);
   s.threads = threads;
   s.seed = scene.params.seed;
   s.boundaryParticles = simulation.boundary().size();
   s.massInitial = simulation.totalMass();
-  out << "scene " << scene.name << ": " << simulation.particles().size() << " fluid particles, "
-      << simulation.boundary().size() << " boundary particles, " << threads << " threads, " << simTime
-      << " s to simulate\n";
+  out << "scene " << scene.name << " (" << s.mode << "): " << simulation.particles().size()
+      << " fluid particles, " << simulation.boundary().size() << " boundary particles, " << threads
+      << " threads, " << simTime << " s to simulate\n";
 
   const double frameDt = 1.0 / scene.frameRate;
   int frame = 0;
@@ -115,6 +116,9 @@ RunSummary runHeadless(const CliOptions& options, std::ostream& out, std::ostrea
   s.momentumFinal = simulation.totalMomentum();
   s.memoryBytes = simulation.memoryBytes();
   s.phases = run.times;
+  s.adaptivity = run.adaptivity;
+  const double stepTime = run.times.total();
+  s.adaptivityShare = stepTime > 0 ? (run.times.levels + run.times.adaptation) / stepTime : 0.0;
   return s;
 }
 
@@ -132,6 +136,10 @@ void printSummary(std::ostream& out, const RunSummary& s) {
       << " %\n"
       << "solver iterations    density " << s.densityIterationsMean << ", divergence "
       << s.divergenceIterationsMean << " per step\n"
+      << "adaptivity           " << s.adaptivity.splits << " splits, " << s.adaptivity.merges << " merges, "
+      << s.adaptivity.redistributions << " redistributions, split error -"
+      << 100.0 * s.adaptivity.splitErrorReduction() << " % by orientation, " << 100.0 * s.adaptivityShare
+      << " % of step time\n"
       << "total mass           " << s.massInitial << " kg -> " << s.massFinal << " kg (drift "
       << (s.massInitial > 0 ? (s.massFinal - s.massInitial) / s.massInitial : 0.0) << ")\n";
 }

@@ -14,6 +14,7 @@ namespace fp::engine {
 /// What a run measured; written to the stats JSON under the names in the comments.
 struct RunSummary {
   std::string scene;                    ///< "scene"
+  std::string mode;                     ///< "mode": uniform-low | uniform-high | surface | fluidplaying
   std::string status = "ok";            ///< "status": ok | unstable
   std::string message;                  ///< "message": the instability report, if any
   int threads = 0;                      ///< "threads"
@@ -37,6 +38,8 @@ struct RunSummary {
   sim::Vec3d momentumFinal{0, 0, 0};    ///< "momentum_final" [kg m/s]
   std::size_t memoryBytes = 0;          ///< "memory_bytes"
   sim::PhaseTimes phases;               ///< "phase_seconds"
+  sim::AdaptivityStats adaptivity;  ///< "splits", "merges", "redistributions", "split_error_reduction", ...
+  double adaptivityShare = 0;       ///< "adaptivity_share": share of step time in levels and adaptation [-]
 };
 
 /// Called with every frame (frame 0 is the initial state), after the PLY export: the headless renderer writes

@@ -11,6 +11,7 @@ void writeStatsJson(const std::string& path, const RunSummary& s) {
   j["status"] = s.status;
   if (!s.message.empty())
     j["message"] = s.message;
+  j["mode"] = s.mode;
   j["threads"] = s.threads;
   j["seed"] = s.seed;
   j["particles_mean"] = s.particlesMean;
@@ -32,10 +33,18 @@ void writeStatsJson(const std::string& path, const RunSummary& s) {
   j["mass_drift"] = s.massInitial > 0 ? (s.massFinal - s.massInitial) / s.massInitial : 0.0;
   j["momentum_final"] = {s.momentumFinal.x(), s.momentumFinal.y(), s.momentumFinal.z()};
   j["memory_bytes"] = s.memoryBytes;
+  j["splits"] = s.adaptivity.splits;
+  j["split_children"] = s.adaptivity.children;
+  j["splits_blocked"] = s.adaptivity.splitsBlocked;
+  j["merges"] = s.adaptivity.merges;
+  j["redistributions"] = s.adaptivity.redistributions;
+  j["split_error_reduction"] = s.adaptivity.splitErrorReduction();
+  j["adaptivity_share"] = s.adaptivityShare;
   j["phase_seconds"] = {{"neighbors", s.phases.neighbors},   {"density", s.phases.density},
                         {"divergence", s.phases.divergence}, {"viscosity", s.phases.viscosity},
                         {"pressure", s.phases.pressure},     {"boundaries", s.phases.boundaries},
-                        {"integrate", s.phases.integrate}};
+                        {"integrate", s.phases.integrate},   {"levels", s.phases.levels},
+                        {"adaptation", s.phases.adaptation}};
   std::ofstream file(path);
   if (!file)
     throw sim::InputError(path + ": cannot open stats file for writing");

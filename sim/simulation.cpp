@@ -112,13 +112,10 @@ void Simulation::createFluid() {
   const double d = 2.0 * r;
   const double rho0 = m_params.restDensity;
   m_latticeMass = Real(rho0 / latticeKernelSum(4.0 * r, d));
-  // Every mode starts from the same lattice of finest particles, so every mode holds the same water. The
-  // modes with coarse particles then merge cubic blocks of e^3 lattice points (e^3 <= mass ratio) into one
-  // particle, which on a lattice reproduces the rest density exactly.
-  const int edge =
-      m_mode == AdaptivityMode::UniformHigh ? 1 : std::max(1, int(std::cbrt(m_params.massRatio + 1e-6)));
-  std::vector<std::uint32_t> blockOf;
-  std::vector<std::uint32_t> blockSize;
+  // Every mode starts from the same lattice of finest particles, so every mode holds the same water; the
+  // modes with coarse particles then merge blocks of it (coarsenInitialLattice).
+  std::vector<Eigen::Vector4i> lattice;  // fluid block and lattice coordinates of each particle, by id
+  std::vector<Eigen::Vector3i> counts;   // lattice points a side of each fluid block
   for (std::size_t b = 0; b < m_scene.fluid.size(); ++b) {
     const FluidBlock& block = m_scene.fluid[b];
     const std::size_t before = m_fluid.size();
@@ -133,9 +130,7 @@ void Simulation::createFluid() {
       start[k] = block.box.min()[k] + 0.5 * (extent[k] - count[k] * d) + 0.5 * d;
     }
     m_fluid.reserve(m_fluid.size() + std::size_t(count.prod()));
-    const Eigen::Vector3i blocks = (count.array() + edge - 1) / edge;
-    const std::size_t firstBlock = blockSize.size();
-    blockSize.resize(firstBlock + std::size_t(blocks.prod()), 0);
+    counts.push_back(count);
     for (int z = 0; z < count.z(); ++z)
       for (int y = 0; y < count.y(); ++y)
         for (int x = 0; x < count.x(); ++x) {
@@ -152,10 +147,7 @@ void Simulation::createFluid() {
           }
           if (!blocked) {
             m_fluid.add(p.cast<Real>(), block.velocity.cast<Real>(), m_latticeMass, m_support, Real(rho0));
-            const std::size_t key =
-                firstBlock + std::size_t(((z / edge) * blocks.y() + y / edge) * blocks.x() + x / edge);
-            blockOf.push_back(std::uint32_t(key));
-            ++blockSize[key];
+            lattice.emplace_back(int(b), x, y, z);
           }
         }
     if (m_fluid.size() == before) {
@@ -169,46 +161,81 @@ void Simulation::createFluid() {
                        " lies outside the domain");
     }
   }
-  if (edge > 1)
-    coarsenInitialLattice(blockOf, blockSize, edge);
+  if (m_mode != AdaptivityMode::UniformHigh)
+    coarsenInitialLattice(lattice, counts);
 }
 
-void Simulation::coarsenInitialLattice(const std::vector<std::uint32_t>& blockOf,
-                                       const std::vector<std::uint32_t>& blockSize, int edge) {
-  const std::uint32_t full = std::uint32_t(edge * edge * edge);
-  std::vector<std::uint8_t> merge(blockSize.size(), 1);
+void Simulation::coarsenInitialLattice(const std::vector<Eigen::Vector4i>& lattice,
+                                       const std::vector<Eigen::Vector3i>& counts) {
+  // Cubic blocks of e^3 lattice points become one particle at their centre of mass: on a lattice of such
+  // blocks this reproduces the rest density exactly. Uniform-low merges every block of the largest edge
+  // (e^3 <= mass ratio), partial blocks at the borders included. The adaptive modes merge, largest edge
+  // first, the full blocks whose every point may be that coarse (block mass at most 1.5 times each point's
+  // optimal mass), so they start graded from fine at the surface to coarse deep down, with no burst of merges
+  // at the first step.
+  const std::size_t n = m_fluid.size();
+  const int maxEdge = std::max(1, int(std::cbrt(m_params.massRatio + 1e-6)));
+  std::vector<Real> target(n, baseMass());
   if (adaptive()) {
-    // only blocks whose every point may be that coarse: the target mass of each member allows the block's
-    // mass
     searchNeighbors();
     SolverContext ctx{m_fluid, m_boundary, m_fluidNbrs, m_boundaryNbrs, m_params};
     m_solver.computeDensityAndFactor(ctx);
     computeLevels(false);
-    const Real blockMass = Real(full) * m_latticeMass;
-    for (std::size_t k = 0; k < blockSize.size(); ++k)
-      merge[k] = blockSize[k] == full;
-    for (std::size_t i = 0; i < m_fluid.size(); ++i) {
-      // ids are the creation order, which indexes blockOf
-      if (blockMass > Real(m_params.shareAbove) * m_target[i])
-        merge[blockOf[m_fluid.id[i]]] = 0;
+    for (std::size_t i = 0; i < n; ++i)
+      target[m_fluid.id[i]] = m_target[i];  // ids are the creation order, which indexes `lattice`
+  }
+  constexpr std::int32_t kNone = -1;
+  std::vector<std::int32_t> groupOf(n, kNone);  // by id
+  std::int32_t groups = 0;
+  for (int e = maxEdge; e >= 2; --e) {
+    std::vector<std::size_t> first(counts.size() + 1, 0);
+    for (std::size_t b = 0; b < counts.size(); ++b) {
+      const Eigen::Vector3i blocks = (counts[b].array() + e - 1) / e;
+      first[b + 1] = first[b] + std::size_t(blocks.prod());
     }
+    auto keyOf = [&](const Eigen::Vector4i& l) {
+      const Eigen::Vector3i blocks = (counts[std::size_t(l[0])].array() + e - 1) / e;
+      return first[std::size_t(l[0])] +
+             std::size_t(((l[3] / e) * blocks.y() + l[2] / e) * blocks.x() + l[1] / e);
+    };
+    std::vector<std::uint32_t> members(first.back(), 0);
+    std::vector<std::uint8_t> ok(first.back(), 1);
+    const Real blockMass = Real(e * e * e) * m_latticeMass;
+    for (std::size_t id = 0; id < n; ++id) {
+      const std::size_t key = keyOf(lattice[id]);
+      ++members[key];
+      if (groupOf[id] != kNone || blockMass > Real(1.5) * target[id])
+        ok[key] = 0;
+    }
+    std::vector<std::int32_t> groupOfKey(first.back(), kNone);
+    for (std::size_t key = 0; key < members.size(); ++key) {
+      const bool full = members[key] == std::uint32_t(e * e * e);
+      if (ok[key] && members[key] > 0 && (full || !adaptive()))
+        groupOfKey[key] = groups++;
+    }
+    for (std::size_t id = 0; id < n; ++id) {
+      if (groupOf[id] == kNone)
+        groupOf[id] = groupOfKey[keyOf(lattice[id])];
+    }
+    if (!adaptive())
+      break;
   }
   struct Sum {
     double m = 0.0;
     Vec3d mx = Vec3d::Zero();
     Vec3d mv = Vec3d::Zero();
   };
-  std::vector<Sum> sums(blockSize.size());
+  std::vector<Sum> sums(static_cast<std::size_t>(groups));
   ParticleSet out;
   out.reserve(m_fluid.size());
   const Real rho0 = Real(m_params.restDensity);
   for (std::size_t i = 0; i < m_fluid.size(); ++i) {
-    const std::uint32_t key = blockOf[m_fluid.id[i]];
-    if (!merge[key]) {
+    const std::int32_t group = groupOf[m_fluid.id[i]];
+    if (group == kNone) {
       out.add(m_fluid.x[i], m_fluid.v[i], m_fluid.m[i], m_fluid.H[i], rho0);
       continue;
     }
-    Sum& sum = sums[key];
+    Sum& sum = sums[std::size_t(group)];
     sum.m += double(m_fluid.m[i]);
     sum.mx += double(m_fluid.m[i]) * m_fluid.x[i].cast<double>();
     sum.mv += double(m_fluid.m[i]) * m_fluid.v[i].cast<double>();

@@ -132,8 +132,8 @@ class Simulation {
 
  private:
   void createFluid();
-  void coarsenInitialLattice(const std::vector<std::uint32_t>& blockOf,
-                             const std::vector<std::uint32_t>& blockSize, int blockEdge);
+  void coarsenInitialLattice(const std::vector<Eigen::Vector4i>& lattice,
+                             const std::vector<Eigen::Vector3i>& counts);
   void computeLevels(bool smooth);
   AdaptivityStats adaptResolution(bool ignoreDelay);
   void updateColliders();
