@@ -98,7 +98,7 @@ struct VertexArray {
   ~VertexArray() { glDeleteVertexArrays(1, &id); }
 };
 
-// Instance layout of a sphere: centre (3), radius, split age, colour coordinate.
+// Vertex layout of a sphere (one point sprite): centre (3), radius, split age, colour coordinate.
 constexpr int kSphereFloats = 6;
 
 void sphereAttributes(const VertexArray& vao, const Buffer& vbo) {
@@ -111,7 +111,6 @@ void sphereAttributes(const VertexArray& vao, const Buffer& vbo) {
     glEnableVertexAttribArray(a);
     glVertexAttribPointer(a, sizes[a], GL_FLOAT, GL_FALSE, stride,
                           reinterpret_cast<const void*>(std::size_t(offset) * sizeof(float)));
-    glVertexAttribDivisor(a, 1);
     offset += sizes[a];
   }
   glBindVertexArray(0);
@@ -165,6 +164,7 @@ struct FluidRenderer::Impl {
   std::size_t particleCount = 0;
   std::size_t sprayCount = 0;
   float maxRadius = 0.01f;
+  float maxPointSize = 64.0f;
 
   struct Collider {
     VertexArray vao;
@@ -187,6 +187,7 @@ struct FluidRenderer::Impl {
   ColorRange legendRange;
 
   int width = 0, height = 0;
+  int halfWidth = 0, halfHeight = 0;  // of the thickness pass
   Texture sceneColor, sceneDepth, fluidDepth[2], thickness, finalColor, finalDepth;
   Framebuffer sceneFbo, depthFbo, filterFbo[2], thicknessFbo, finalFbo;
 
@@ -214,6 +215,9 @@ struct FluidRenderer::Impl {
     glEnableVertexAttribArray(2);
     glVertexAttribPointer(2, 1, GL_FLOAT, GL_FALSE, stride, reinterpret_cast<const void*>(24));
     glBindVertexArray(0);
+    GLfloat range[2] = {1.0f, 64.0f};
+    glGetFloatv(GL_POINT_SIZE_RANGE, range);
+    maxPointSize = range[1];
     gl::checkError("FluidRenderer setup");
   }
 
@@ -226,7 +230,10 @@ struct FluidRenderer::Impl {
     sceneDepth.create(GL_DEPTH_COMPONENT32F, w, h, GL_DEPTH_COMPONENT, GL_FLOAT, GL_NEAREST);
     for (Texture& t : fluidDepth)
       t.create(GL_RG32F, w, h, GL_RG, GL_FLOAT, GL_NEAREST);
-    thickness.create(GL_RG16F, w, h, GL_RG, GL_FLOAT, GL_NEAREST);
+    // thickness varies slowly across the image: half resolution, read back with linear filtering
+    halfWidth = (w + 1) / 2;
+    halfHeight = (h + 1) / 2;
+    thickness.create(GL_RG16F, halfWidth, halfHeight, GL_RG, GL_FLOAT, GL_LINEAR);
     finalColor.create(GL_RGBA8, w, h, GL_RGBA, GL_UNSIGNED_BYTE, GL_NEAREST);
     finalDepth.create(GL_DEPTH_COMPONENT32F, w, h, GL_DEPTH_COMPONENT, GL_FLOAT, GL_NEAREST);
     sceneFbo.build(sceneColor, &sceneDepth, "scene");
@@ -234,8 +241,8 @@ struct FluidRenderer::Impl {
     depthFbo.build(fluidDepth[0], &sceneDepth, "fluid depth");
     filterFbo[0].build(fluidDepth[0], nullptr, "filter 0");
     filterFbo[1].build(fluidDepth[1], nullptr, "filter 1");
-    // the thickness pass tests against the scene's depth without writing it
-    thicknessFbo.build(thickness, &sceneDepth, "thickness");
+    // the thickness pass samples the scene's depth instead of testing against it (other size)
+    thicknessFbo.build(thickness, nullptr, "thickness");
     finalFbo.build(finalColor, &finalDepth, "final");
   }
 
@@ -413,12 +420,16 @@ void FluidRenderer::renderView(const Mat4& view, const Mat4& projection, const R
     glDepthMask(GL_TRUE);
     glDisable(GL_BLEND);
   };
-  auto drawSpheres = [&](ShaderProgram& p, GLuint vao, GLsizei count, float highlight) {
+  auto drawSpheres = [&](ShaderProgram& p, GLuint vao, GLsizei count, float highlight, int w, int h) {
     viewUniforms(p);
+    p.set("uViewport", Eigen::Vector2f(float(w), float(h)));
+    p.set("uMaxPointSize", r.maxPointSize);
     p.set("uRadiusScale", 1.0f);
     p.set("uHighlightDuration", highlight);
+    glEnable(GL_PROGRAM_POINT_SIZE);
     glBindVertexArray(vao);
-    glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, count);
+    glDrawArrays(GL_POINTS, 0, count);
+    glDisable(GL_PROGRAM_POINT_SIZE);
   };
 
   // 1. scene: sky, floor, opaque colliders and the far walls of the container
@@ -457,24 +468,31 @@ void FluidRenderer::renderView(const Mat4& view, const Mat4& projection, const R
 
   const float highlight = s.highlightSplits ? s.highlightDuration : 0.0f;
   if (fluidView) {
-    // 2. thickness: additive, tested against the scene's depth, not written
+    // 2. thickness at half resolution: additive, culled by the scene's depth in the shader
     glBindFramebuffer(GL_FRAMEBUFFER, r.thicknessFbo.id);
+    glViewport(0, 0, r.halfWidth, r.halfHeight);
     glClearColor(0, 0, 0, 0);
     glClear(GL_COLOR_BUFFER_BIT);
-    glDepthMask(GL_FALSE);
+    glDisable(GL_DEPTH_TEST);
     glEnable(GL_BLEND);
     glBlendFunc(GL_ONE, GL_ONE);
-    if (n)
-      drawSpheres(r.sphereThickness, r.particleVao.id, n, highlight);
+    if (n) {
+      glActiveTexture(GL_TEXTURE0);
+      glBindTexture(GL_TEXTURE_2D, r.sceneDepth.id);
+      r.sphereThickness.use();
+      r.sphereThickness.set("uSceneDepth", 0);
+      drawSpheres(r.sphereThickness, r.particleVao.id, n, highlight, r.halfWidth, r.halfHeight);
+    }
     glDisable(GL_BLEND);
-    glDepthMask(GL_TRUE);
+    glEnable(GL_DEPTH_TEST);
+    glViewport(0, 0, r.width, r.height);
     mark(m_times.thickness);
 
     // 3. depth of the nearest sphere, into the scene's depth so that hidden water is culled
     glBindFramebuffer(GL_FRAMEBUFFER, r.depthFbo.id);
     glClear(GL_COLOR_BUFFER_BIT);
     if (n)
-      drawSpheres(r.sphereDepth, r.particleVao.id, n, 0.0f);
+      drawSpheres(r.sphereDepth, r.particleVao.id, n, 0.0f, r.width, r.height);
     mark(m_times.depth);
 
     // 4. narrow-range filter, horizontal then vertical, ping-ponging between the two depth textures
@@ -522,7 +540,7 @@ void FluidRenderer::renderView(const Mat4& view, const Mat4& projection, const R
   } else {
     // the particle view: lit spheres straight into the final image
     if (n)
-      drawSpheres(r.sphereColor, r.particleVao.id, n, 0.0f);
+      drawSpheres(r.sphereColor, r.particleVao.id, n, 0.0f, r.width, r.height);
     mark(m_times.composite);
   }
 
@@ -531,7 +549,7 @@ void FluidRenderer::renderView(const Mat4& view, const Mat4& projection, const R
     glEnable(GL_BLEND);
     glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
     glDepthMask(GL_FALSE);
-    drawSpheres(r.spray, r.sprayVao.id, GLsizei(r.sprayCount), 0.0f);
+    drawSpheres(r.spray, r.sprayVao.id, GLsizei(r.sprayCount), 0.0f, r.width, r.height);
     glDepthMask(GL_TRUE);
     glDisable(GL_BLEND);
   }

@@ -56,7 +56,7 @@ struct RenderSettings {
   bool showColliders = true;               ///< draw floor, container and bodies
   int filterIterations = 2;                ///< narrow-range filter passes (each horizontal + vertical), >= 0
   float filterRadius = 3.0f;               ///< filter half-width in particle radii, > 0
-  float filterMaxPixels = 24.0f;           ///< cap on the filter half-width [px]
+  float filterMaxPixels = 16.0f;           ///< cap on the filter half-width [px]
   float filterRange = 3.0f;                ///< depth range kept by the filter, in particle radii
   Eigen::Vector3f absorption{2.2f, 0.55f, 0.3f};  ///< Beer-Lambert coefficient per channel [1/m]
   float refraction = 0.04f;        ///< screen-space refraction offset at full thickness [view units]

@@ -48,6 +48,7 @@ void checkError(const char* where);
   X(glFinish)                \
   X(glGenTextures)           \
   X(glGetError)              \
+  X(glGetFloatv)             \
   X(glGetIntegerv)           \
   X(glGetString)             \
   X(glPixelStorei)           \
@@ -81,6 +82,7 @@ FP_GL11_FUNCTIONS(FP_GL11_DECLARE)
 #define glFinish ::fp::render::gl::p_glFinish
 #define glGenTextures ::fp::render::gl::p_glGenTextures
 #define glGetError ::fp::render::gl::p_glGetError
+#define glGetFloatv ::fp::render::gl::p_glGetFloatv
 #define glGetIntegerv ::fp::render::gl::p_glGetIntegerv
 #define glGetString ::fp::render::gl::p_glGetString
 #define glPixelStorei ::fp::render::gl::p_glPixelStorei

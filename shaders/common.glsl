@@ -16,6 +16,13 @@ vec3 skyColor(vec3 dir) {
   return c + kSunColor * (pow(s, 800.0) * 6.0 + pow(s, 24.0) * 0.12);
 }
 
+// A point on the view ray through window position `fragCoord` of a viewport `viewport` pixels large (view
+// space, perspective camera at the origin, any off-centre projection).
+vec3 viewRay(vec2 fragCoord, vec2 viewport, mat4 proj) {
+  vec2 ndc = fragCoord / viewport * 2.0 - 1.0;
+  return vec3((ndc.x + proj[2][0]) / proj[0][0], (ndc.y + proj[2][1]) / proj[1][1], -1.0);
+}
+
 // The view ray through `p` (view space, perspective camera at the origin) against the sphere (c, r): false on
 // a miss, else the nearer hit and the length of the chord inside the sphere.
 bool raySphere(vec3 p, vec3 c, float r, out vec3 hit, out float chord) {

@@ -1,19 +1,19 @@
 #version 330 core
 #include "common.glsl"
 // Particle view: lit spheres coloured by the inspected quantity.
-in vec3 vViewPos;
 flat in vec3 vCenter;
 flat in float vRadius;
 flat in float vHighlight;
 flat in float vValue;
 uniform mat4 uView;
 uniform mat4 uProj;
+uniform vec2 uViewport;
 out vec4 fColor;
 
 void main() {
   vec3 hit;
   float chord;
-  if (!raySphere(vViewPos, vCenter, vRadius, hit, chord)) discard;
+  if (!raySphere(viewRay(gl_FragCoord.xy, uViewport, uProj), vCenter, vRadius, hit, chord)) discard;
   vec3 n = (hit - vCenter) / vRadius;
   vec3 l = mat3(uView) * kSunDir;
   vec3 v = normalize(-hit);
