@@ -1,0 +1,158 @@
+// The adaptive modes on whole scenes: a tank at rest keeps still with fine particles at its surface and
+// coarse ones inside, the propeller draws fine particles into its vortices (unlike surface-only adaptivity),
+// a long run keeps its particle count bounded and its mass and momentum, and runs are deterministic. Tests
+// named *Small* also run under the sanitizers in CI.
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <cstring>
+
+#include "engine/scene_loader.h"
+#include "sim/simulation.h"
+
+using namespace fp::sim;
+
+namespace {
+
+SceneDesc tankScene(const Vec3d& half, const Vec3d& waterLo, const Vec3d& waterHi, double radius) {
+  SceneDesc s;
+  s.name = "test tank";
+  s.params.particleRadius = radius;
+  ColliderDesc tank;
+  tank.name = "tank";
+  tank.shape = ShapeType::Box;
+  tank.container = true;
+  tank.halfExtents = half;
+  tank.position = Vec3d(0, half.y(), 0);
+  s.colliders.push_back(tank);
+  s.fluid.push_back(FluidBlock{Aabb(waterLo, waterHi), Vec3d::Zero()});
+  s.domain = Aabb(Vec3d(-half.x(), 0, -half.z()) - Vec3d::Constant(0.05),
+                  Vec3d(half.x(), 2 * half.y(), half.z()) + Vec3d::Constant(0.05));
+  return s;
+}
+
+/// mean mass, in finest masses, of the particles selected by `pick`
+template <class F>
+double meanMassRatio(const Simulation& sim, F&& pick) {
+  double sum = 0.0;
+  int count = 0;
+  const ParticleSet& p = sim.particles();
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    if (pick(i)) {
+      sum += double(p.m[i]) / double(sim.latticeMass());
+      ++count;
+    }
+  }
+  return count ? sum / count : 0.0;
+}
+
+}  // namespace
+
+TEST(AdaptivePhysicsTest, TankAtRestStaysStillFineAtTheSurfaceCoarseInside) {
+  SceneDesc scene = tankScene(Vec3d(0.2, 0.2, 0.2), Vec3d(-0.2, 0.0, -0.2), Vec3d(0.2, 0.3, 0.2), 0.2 / 20.4);
+  scene.mode = AdaptivityMode::FluidPlaying;
+  SceneDesc uniform = scene;
+  uniform.mode = AdaptivityMode::UniformHigh;
+  const std::size_t nHigh = Simulation(uniform).particles().size();
+  Simulation sim(scene);
+  const double mass0 = sim.totalMass();
+  double errorSum = 0.0;
+  int steps = 0;
+  while (sim.time() < 1.5) {
+    sim.step();
+    if (sim.time() > 1.0) {
+      errorSum += sim.lastStep().densityError;
+      ++steps;
+    }
+  }
+  const ParticleSet& p = sim.particles();
+  EXPECT_NEAR(sim.totalMass(), mass0, 1e-6 * mass0);
+  EXPECT_LT(errorSum / steps, 0.005);
+  // still: the water surface stays level and the kinetic energy small
+  double top = 0.0;
+  double e = 0.0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    top = std::max(top, double(p.x[i].y()));
+    e += 0.5 * double(p.m[i]) * double(p.v[i].squaredNorm());
+  }
+  EXPECT_NEAR(top, 0.3, 0.03);
+  const double vrms = std::sqrt(2.0 * e / mass0);
+  EXPECT_LT(vrms, 0.3) << "rms speed " << vrms << " m/s";
+  // finest at the surface, coarse at the bottom, and far fewer particles than uniform-high
+  const double r = scene.params.particleRadius;
+  const double atSurface = meanMassRatio(sim, [&](std::size_t i) { return p.x[i].y() > top - 3 * r; });
+  const double atBottom = meanMassRatio(sim, [&](std::size_t i) { return p.x[i].y() < 0.08; });
+  EXPECT_LT(atSurface, 1.5);
+  EXPECT_GT(atBottom, 6.0);
+  EXPECT_LT(double(p.size()), 0.6 * double(nHigh)) << p.size() << " of " << nHigh;
+}
+
+TEST(AdaptivePhysicsTest, PropellerDrawsFineParticlesIntoItsVorticesUnlikeSurfaceOnly) {
+  SceneDesc scene = fp::engine::loadScene(std::string(FP_SOURCE_DIR) + "/assets/scenes/propeller.json");
+  // the propeller's region, below the band of the surface: there only vorticity and shear can refine
+  auto nearPropeller = [](const Vec3& x) {
+    return std::abs(x.x()) < 0.12f && Vec3(0, x.y() - 0.17f, x.z()).norm() < 0.1f;
+  };
+  double meanMass[2] = {0.0, 0.0};
+  const AdaptivityMode modes[2] = {AdaptivityMode::Surface, AdaptivityMode::FluidPlaying};
+  for (int k = 0; k < 2; ++k) {
+    scene.mode = modes[k];
+    Simulation sim(scene);
+    while (sim.time() < 0.4)
+      sim.step();
+    const ParticleSet& p = sim.particles();
+    meanMass[k] = meanMassRatio(sim, [&](std::size_t i) { return nearPropeller(p.x[i]); });
+  }
+  EXPECT_GT(meanMass[0], 3.0);
+  EXPECT_LT(meanMass[1], 0.7 * meanMass[0]) << "surface " << meanMass[0] << ", fluidplaying " << meanMass[1];
+}
+
+TEST(AdaptivePhysicsTest, DamBreakSmallLongRunBoundedAndConserving) {
+  SceneDesc scene = tankScene(Vec3d(0.3, 0.2, 0.1), Vec3d(-0.3, 0.0, -0.1), Vec3d(-0.05, 0.3, 0.1), 0.008);
+  scene.mode = AdaptivityMode::FluidPlaying;
+  SceneDesc uniform = scene;
+  uniform.mode = AdaptivityMode::UniformHigh;
+  const std::size_t nHigh = Simulation(uniform).particles().size();
+  Simulation sim(scene);
+  const double mass0 = sim.totalMass();
+  const Vec3d p0 = sim.totalMomentum();
+  std::size_t most = 0;
+  while (sim.time() < 2.0) {
+    ASSERT_NO_THROW(sim.step());
+    most = std::max(most, sim.particles().size());
+  }
+  EXPECT_LE(most, nHigh + nHigh / 10);
+  EXPECT_GT(sim.runStats().adaptivity.splits, 0u);
+  EXPECT_GT(sim.runStats().adaptivity.merges, 0u);
+  EXPECT_NEAR(sim.totalMass(), mass0, 1e-6 * mass0);
+  const Vec3d gravityImpulse = mass0 * sim.time() * Vec3d(0, -9.81, 0);
+  const Vec3d residual = sim.totalMomentum() - p0 - gravityImpulse - sim.boundaryImpulse();
+  EXPECT_LT(residual.norm(), 1e-4 * gravityImpulse.norm()) << residual.transpose();
+  for (const Vec3& x : sim.particles().x) {
+    EXPECT_GE(x.y(), 0.0f);
+    EXPECT_LE(std::abs(x.x()), 0.3f);
+  }
+}
+
+TEST(AdaptivePhysicsTest, AdaptiveRunsSmallAreDeterministicAcrossThreadCounts) {
+  SceneDesc scene =
+      tankScene(Vec3d(0.15, 0.15, 0.08), Vec3d(-0.15, 0.0, -0.08), Vec3d(0.0, 0.2, 0.08), 0.008);
+  scene.mode = AdaptivityMode::FluidPlaying;
+  std::vector<ParticleSet> results;
+  for (int threads : {1, 2, 2}) {
+    tbb::global_control gc(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
+    Simulation sim(scene);
+    while (sim.time() < 0.3)
+      sim.step();
+    EXPECT_GT(sim.runStats().adaptivity.splits + sim.runStats().adaptivity.merges, 0u);
+    results.push_back(sim.particles());
+  }
+  for (std::size_t k = 1; k < results.size(); ++k) {
+    const ParticleSet& a = results[0];
+    const ParticleSet& b = results[k];
+    ASSERT_EQ(a.size(), b.size());
+    EXPECT_EQ(std::memcmp(a.x.data(), b.x.data(), a.size() * sizeof(Vec3)), 0);
+    EXPECT_EQ(std::memcmp(a.m.data(), b.m.data(), a.size() * sizeof(Real)), 0);
+    EXPECT_EQ(a.id, b.id);
+  }
+}

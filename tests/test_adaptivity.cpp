@@ -1,0 +1,234 @@
+// The adaptivity's parts on hand-built cases: level mapping and optimal mass, split templates, and split,
+// merge and share on random neighbourhoods (conservation, walls, orientation choice). Tests named *Small*
+// also run under the sanitizers in CI.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <random>
+
+#include "sim/adaptivity.h"
+#include "sim/boundary_sampling.h"
+#include "sim/dfsph_solver.h"
+#include "sim/kernels.h"
+#include "sim/levels.h"
+#include "sim/split_templates.h"
+
+using namespace fp::sim;
+
+TEST(LevelsTest, RampAndLevelsAtTheIntervalEdgesSmall) {
+  EXPECT_DOUBLE_EQ(levelRamp(1.0, 1.0, 3.0), 0.0);
+  EXPECT_DOUBLE_EQ(levelRamp(0.0, 1.0, 3.0), 0.0);
+  EXPECT_DOUBLE_EQ(levelRamp(2.0, 1.0, 3.0), 0.5);
+  EXPECT_DOUBLE_EQ(levelRamp(3.0, 1.0, 3.0), 1.0);
+  EXPECT_DOUBLE_EQ(levelRamp(9.0, 1.0, 3.0), 1.0);
+  EXPECT_DOUBLE_EQ(visibleLevel(0.0, 0.04, 0.16), 0.0);
+  EXPECT_DOUBLE_EQ(visibleLevel(0.10, 0.04, 0.16), 0.5);
+  EXPECT_DOUBLE_EQ(refinementLevel(5.0, 12.0, 30.0, 8.0), 1.0);
+  EXPECT_DOUBLE_EQ(refinementLevel(21.0, 12.0, 30.0, 8.0), 4.5);
+  EXPECT_DOUBLE_EQ(refinementLevel(30.0, 12.0, 30.0, 8.0), 8.0);
+}
+
+TEST(LevelsTest, OptimalMassOnHandComputedCasesSmall) {
+  const double mf = 2.0;
+  const double mb = 54.0;  // ratio 27
+  // surface: finest, whatever the other levels
+  EXPECT_DOUBLE_EQ(optimalMass(0.0, 1.0, 1.0, mf, mb), 2.0);
+  EXPECT_DOUBLE_EQ(optimalMass(0.0, 8.0, 8.0, mf, mb), 2.0);
+  // deep and calm: coarsest
+  EXPECT_DOUBLE_EQ(optimalMass(1.0, 1.0, 1.0, mf, mb), 54.0);
+  // halfway down: 2 + 0.5 * 52
+  EXPECT_DOUBLE_EQ(optimalMass(0.5, 1.0, 1.0, mf, mb), 28.0);
+  // deep but vortical (R_omega = 4) and shearing (R_nu = 2): 2 + 52 / 8
+  EXPECT_DOUBLE_EQ(optimalMass(1.0, 4.0, 2.0, mf, mb), 8.5);
+  // support follows the mass: 27 times the mass, 3 times the support
+  EXPECT_NEAR(supportForMass(Real(27), Real(1), Real(0.01)), 0.12, 1e-6);
+}
+
+TEST(SplitTemplatesTest, PatternsAreCentredAndShapedSmall) {
+  const SplitTemplates& t = SplitTemplates::get();
+  for (int n = SplitTemplates::kMinChildren; n <= SplitTemplates::kMaxChildren; ++n) {
+    const auto& x = t.offsets(n);
+    ASSERT_EQ(int(x.size()), n);
+    Vec3d mean = Vec3d::Zero();
+    double nearest = 1e9;
+    for (std::size_t a = 0; a < x.size(); ++a) {
+      mean += x[a] / double(n);
+      EXPECT_LT(x[a].norm(), 2.0) << "n = " << n;  // inside the parent's spacing
+      for (std::size_t b = a + 1; b < x.size(); ++b)
+        nearest = std::min(nearest, (x[a] - x[b]).norm());
+    }
+    EXPECT_LT(mean.norm(), 1e-9) << "n = " << n;
+    // no stacked children: at least half the children's own spacing 2 n^(-1/3) apart
+    EXPECT_GT(nearest, 0.5 * 2.0 / std::cbrt(double(n))) << "n = " << n;
+    EXPECT_LT(t.residual(n), 0.02) << "n = " << n;
+  }
+  // 1:2 is a segment through the parent, 1:3 the paper's equilateral triangle, 1:4 a regular tetrahedron
+  const auto& two = t.offsets(2);
+  EXPECT_NEAR((two[0] + two[1]).norm(), 0.0, 1e-9);
+  const auto& three = t.offsets(3);
+  const double a = (three[0] - three[1]).norm();
+  EXPECT_NEAR((three[1] - three[2]).norm(), a, 1e-3 * a);
+  EXPECT_NEAR((three[2] - three[0]).norm(), a, 1e-3 * a);
+  const auto& four = t.offsets(4);
+  const double e = (four[0] - four[1]).norm();
+  for (int i = 0; i < 4; ++i)
+    for (int j = i + 1; j < 4; ++j)
+      EXPECT_NEAR((four[std::size_t(i)] - four[std::size_t(j)]).norm(), e, 1e-2 * e);
+}
+
+namespace {
+
+/// A jittered cloud of particles of mixed masses inside a container, with neighbour lists, ready for one
+/// adaptation step.
+struct Neighbourhood {
+  SimParams params;
+  ParticleSet p;
+  BoundarySet boundary;
+  std::vector<ColliderState> colliders;
+  UniformGrid grid;
+  NeighborList fluidNbrs;
+  NeighborList boundaryNbrs;
+  Real mFine = 0;
+
+  explicit Neighbourhood(unsigned seed) {
+    const Real r = Real(0.01);
+    params.particleRadius = r;
+    params.transferRate = 0.25;
+    mFine = Real(params.restDensity * 8.0 * double(r) * r * r);
+    ColliderState tank;
+    tank.desc.shape = ShapeType::Box;
+    tank.desc.container = true;
+    tank.desc.halfExtents = Vec3d::Constant(0.1);
+    colliders.push_back(tank);
+    boundary.build(colliders, r);
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<Real> jitter(-0.3f * r, 0.3f * r);
+    std::uniform_real_distribution<Real> massFactor(0.6f, 4.0f);
+    std::uniform_real_distribution<Real> speed(-1.0f, 1.0f);
+    const Real ratios[] = {0.3f, 0.7f, 1.0f, 1.5f, 3.0f, 9.0f};
+    std::uniform_int_distribution<int> pick(0, 5);
+    for (int z = -4; z <= 4; ++z)
+      for (int y = -4; y <= 4; ++y)
+        for (int x = -4; x <= 4; ++x) {
+          const Vec3 pos =
+              Real(2) * r * Vec3(Real(x), Real(y), Real(z)) + Vec3(jitter(rng), jitter(rng), jitter(rng));
+          const Real m = massFactor(rng) * mFine;
+          const std::size_t i =
+              p.add(pos, Vec3(speed(rng), speed(rng), speed(rng)), m, supportForMass(m, mFine, r), 1000.0f);
+          p.mOpt[i] = m / ratios[pick(rng)];
+        }
+    grid.setup(Aabb(Vec3d::Constant(-0.15), Vec3d::Constant(0.15)), Real(4) * r);
+    std::vector<std::uint32_t> order;
+    std::vector<std::uint32_t> staticCells;
+    std::vector<std::uint32_t> fluidCells;
+    std::vector<std::uint32_t> noCells(grid.cellCount() + 1, 0);
+    grid.sort(boundary.x.data(), boundary.staticCount(), order, staticCells);
+    boundary.permute(0, order);
+    grid.sort(p.x.data(), p.size(), order, fluidCells);
+    p.permute(order);
+    Real maxH = boundary.support();
+    for (Real h : p.H)
+      maxH = std::max(maxH, h);
+    NeighborSearch search;
+    search.build(grid, p.x, p.H, {GridPoints{p.x.data(), p.H.data(), 0, &fluidCells, 0}}, 0, maxH, fluidNbrs);
+    search.build(grid, p.x, p.H,
+                 {GridPoints{boundary.x.data(), nullptr, boundary.support(), &staticCells, 0},
+                  GridPoints{boundary.x.data(), nullptr, boundary.support(), &noCells, 0}},
+                 -1, maxH, boundaryNbrs);
+  }
+
+  AdaptContext context(double time) {
+    return AdaptContext{p, fluidNbrs, boundaryNbrs, boundary, colliders, params, mFine, time, 7};
+  }
+};
+
+}  // namespace
+
+TEST(AdaptivityTest, SplitMergeShareConserveMassAndMomentumSmall) {
+  for (unsigned seed = 1; seed <= 4; ++seed) {
+    Neighbourhood nb(seed);
+    const std::size_t before = nb.p.size();
+    const double mass = nb.p.totalMass();
+    const Vec3d momentum = nb.p.totalMomentum();
+    Adaptivity adaptivity;
+    const AdaptivityStats st = adaptivity.adapt(nb.context(0.5), true);
+    EXPECT_GT(st.splits, 10u);
+    EXPECT_GT(st.merges, 10u);
+    EXPECT_GT(st.redistributions, 10u);
+    EXPECT_EQ(nb.p.size(), before + st.children - st.splits - st.merges);
+    // float masses: the sums agree to single-precision round-off
+    EXPECT_NEAR(nb.p.totalMass(), mass, 1e-6 * mass);
+    EXPECT_LT((nb.p.totalMomentum() - momentum).norm(), 1e-6 * mass);
+    for (Real m : nb.p.m)
+      EXPECT_GT(m, 0.0f);
+  }
+}
+
+TEST(AdaptivityTest, ChildrenNeverLandInAWallSmall) {
+  Neighbourhood nb(11);
+  // every particle far too heavy: all split, many of them next to the container's walls
+  for (std::size_t i = 0; i < nb.p.size(); ++i)
+    nb.p.mOpt[i] = nb.p.m[i] / Real(5);
+  Adaptivity adaptivity;
+  const AdaptivityStats st = adaptivity.adapt(nb.context(1.0), true);
+  EXPECT_GT(st.splits, 200u);
+  std::size_t children = 0;
+  for (std::size_t i = 0; i < nb.p.size(); ++i) {
+    if (!(nb.p.flags[i] & kFlagSplit))
+      continue;
+    ++children;
+    const double rChild = nb.params.particleRadius * std::cbrt(double(nb.p.m[i]) / double(nb.mFine));
+    EXPECT_GE(signedDistance(nb.colliders[0].desc, nb.p.x[i].cast<double>()), 2.0 * rChild * (1 - 1e-4));
+    EXPECT_EQ(nb.p.splitTime[i], Real(1.0));
+  }
+  EXPECT_EQ(children, st.children);
+}
+
+TEST(AdaptivityTest, OrientationChoiceLowersTheSplitDensityErrorSmall) {
+  double chosen = 0.0;
+  double unrotated = 0.0;
+  std::uint64_t compared = 0;
+  for (unsigned seed = 20; seed < 24; ++seed) {
+    Neighbourhood nb(seed);
+    // the parents' densities as the solver sees them: the children are to reproduce them
+    DfsphSolver solver;
+    SolverContext ctx{nb.p, nb.boundary, nb.fluidNbrs, nb.boundaryNbrs, nb.params};
+    solver.computeDensityAndFactor(ctx);
+    for (std::size_t i = 0; i < nb.p.size(); ++i)
+      nb.p.mOpt[i] = nb.p.m[i] / Real(3);
+    Adaptivity adaptivity;
+    const AdaptivityStats st = adaptivity.adapt(nb.context(0.0), true);
+    chosen += st.splitErrorChosen;
+    unrotated += st.splitErrorUnrotated;
+    compared += st.splitsCompared;
+  }
+  ASSERT_GT(compared, 500u);
+  const double reduction = 1.0 - chosen / unrotated;
+  // the paper reports 15.5 %; with 8 candidates we measure about 30 % on these neighbourhoods
+  EXPECT_GT(reduction, 0.15) << "mean split error reduction " << reduction;
+  std::printf("split error reduction by orientation: %.1f %% over %llu splits\n", 100.0 * reduction, (unsigned long long)compared);
+  EXPECT_LT(reduction, 1.0);
+}
+
+TEST(AdaptivityTest, SupportsBlendTowardsTheirMassSmall) {
+  SimParams params;
+  params.particleRadius = 0.01;
+  params.supportBlendSteps = 10;
+  ParticleSet p;
+  const Real mf = 1.0f;
+  p.add(Vec3::Zero(), Vec3::Zero(), 1.0f, 0.12f, 1000.0f);  // a fresh child with its parent's support
+  const Real target = supportForMass(1.0f, mf, 0.01f);
+  Real previous = p.H[0];
+  for (int k = 0; k < 10; ++k) {
+    Adaptivity::blendSupports(p, params, mf);
+    EXPECT_LT(p.H[0], previous);
+    EXPECT_GE(p.H[0], target);
+    previous = p.H[0];
+  }
+  // after the blend period about 5 % of the difference is left, then it snaps
+  EXPECT_LT(p.H[0] - target, 0.08f * (0.12f - target));
+  for (int k = 0; k < 40; ++k)
+    Adaptivity::blendSupports(p, params, mf);
+  EXPECT_EQ(p.H[0], target);
+}
