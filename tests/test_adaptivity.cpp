@@ -205,8 +205,8 @@ TEST(AdaptivityTest, OrientationChoiceLowersTheSplitDensityErrorSmall) {
   }
   ASSERT_GT(compared, 500u);
   const double reduction = 1.0 - chosen / unrotated;
-  // the paper reports 15.5 %; with 8 candidates we measure about 30 % on these neighbourhoods
-  EXPECT_GT(reduction, 0.15) << "mean split error reduction " << reduction;
+  // the paper reports 15.5 %; with 8 candidates we measure about 55 % on these neighbourhoods
+  EXPECT_GT(reduction, 0.3) << "mean split error reduction " << reduction;
   std::printf("split error reduction by orientation: %.1f %% over %llu splits\n", 100.0 * reduction, (unsigned long long)compared);
   EXPECT_LT(reduction, 1.0);
 }
