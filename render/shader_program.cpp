@@ -4,7 +4,6 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <regex>
 #include <sstream>
 
 #include "render/gl_api.h"
@@ -24,6 +23,75 @@ std::string defaultShaderDir() {
 namespace {
 
 constexpr int kFileLineStride = 100000;
+
+// Hand-written parsers: std::regex trips GCC 12's maybe-uninitialized warning under the sanitizer build.
+
+// `#include "name"` (spaces allowed around the tokens) -> name; false for any other line
+bool parseInclude(const std::string& line, std::string& name) {
+  std::size_t k = line.find_first_not_of(" \t");
+  if (k == std::string::npos || line[k] != '#')
+    return false;
+  k = line.find_first_not_of(" \t", k + 1);
+  if (k == std::string::npos || line.compare(k, 7, "include") != 0)
+    return false;
+  k = line.find_first_not_of(" \t", k + 7);
+  if (k == std::string::npos || line[k] != '"')
+    return false;
+  const std::size_t end = line.find('"', k + 1);
+  if (end == std::string::npos || line.find_first_not_of(" \t\r", end + 1) != std::string::npos)
+    return false;
+  name = line.substr(k + 1, end - k - 1);
+  return !name.empty();
+}
+
+// reads decimal digits at `k`; false when there are none
+bool readNumber(const std::string& s, std::size_t& k, long& value) {
+  const std::size_t start = k;
+  value = 0;
+  while (k < s.size() && s[k] >= '0' && s[k] <= '9')
+    value = value * 10 + (s[k++] - '0');
+  return k > start;
+}
+
+// The line number and message of a driver log line: Mesa "0:12(5): msg", NVIDIA "0(12) : msg",
+// others "ERROR: 0:12: msg".
+bool parseLogLine(const std::string& line, long& number, std::string& message) {
+  std::size_t k = line.find_first_not_of(" \t");
+  if (k == std::string::npos)
+    return false;
+  for (const char* prefix : {"ERROR: ", "WARNING: "}) {
+    if (line.compare(k, std::strlen(prefix), prefix) == 0)
+      k += std::strlen(prefix);
+  }
+  long source = 0;
+  if (!readNumber(line, k, source) || k >= line.size())
+    return false;
+  if (line[k] == ':') {  // Mesa or generic
+    ++k;
+    if (!readNumber(line, k, number))
+      return false;
+    if (k < line.size() && line[k] == '(') {
+      long column = 0;
+      ++k;
+      if (!readNumber(line, k, column) || k >= line.size() || line[k] != ')')
+        return false;
+      ++k;
+    }
+  } else if (line[k] == '(') {  // NVIDIA
+    ++k;
+    if (!readNumber(line, k, number) || k >= line.size() || line[k] != ')')
+      return false;
+    ++k;
+  } else {
+    return false;
+  }
+  k = line.find_first_not_of(" \t", k);
+  if (k == std::string::npos || line[k] != ':')
+    return false;
+  k = line.find_first_not_of(" \t", k + 1);
+  message = k == std::string::npos ? std::string() : line.substr(k);
+  return true;
+}
 
 std::string readFile(const fs::path& path, const std::string& includedFrom) {
   std::ifstream in(path, std::ios::binary);
@@ -46,17 +114,14 @@ void expand(const fs::path& path, const std::string& includedFrom, ShaderSource&
   const int fileIndex = int(out.files.size());
   out.files.push_back(path.string());
   std::istringstream in(readFile(path, includedFrom));
-  static const std::regex includeLine(R"(^\s*#\s*include\s+"([^"]+)\"\s*$)");
-  std::string line;
+  std::string line, include;
   int lineNumber = 0;
   while (std::getline(in, line)) {
     ++lineNumber;
-    std::smatch match;
-    if (std::regex_match(line, match, includeLine)) {
+    if (parseInclude(line, include)) {
       const int child = int(out.files.size());
       out.text += "#line " + std::to_string(child * kFileLineStride + 1) + "\n";
-      expand(path.parent_path() / match[1].str(), path.string() + ":" + std::to_string(lineNumber), out,
-             depth + 1);
+      expand(path.parent_path() / include, path.string() + ":" + std::to_string(lineNumber), out, depth + 1);
       out.text += "#line " + std::to_string(fileIndex * kFileLineStride + lineNumber + 1) + "\n";
     } else {
       out.text += line + "\n";
@@ -98,20 +163,14 @@ ShaderSource loadShaderSource(const std::string& dir, const std::string& name) {
 }
 
 std::string formatShaderLog(const std::string& log, const std::vector<std::string>& files) {
-  // Mesa "0:12(5): error: ...", NVIDIA "0(12) : error C1008: ...", others "ERROR: 0:12: ..."
-  static const std::regex mesa(R"(^\s*(\d+):(\d+)\(\d+\):\s*(.*)$)");
-  static const std::regex nvidia(R"(^\s*(\d+)\((\d+)\)\s*:\s*(.*)$)");
-  static const std::regex generic(R"(^\s*(?:ERROR|WARNING):\s*(\d+):(\d+):\s*(.*)$)");
   std::istringstream in(log);
-  std::string line, out;
+  std::string line, out, message;
   while (std::getline(in, line)) {
-    std::smatch m;
-    if (std::regex_match(line, m, mesa) || std::regex_match(line, m, nvidia) ||
-        std::regex_match(line, m, generic)) {
-      const long number = std::stol(m[2].str());
+    long number = 0;
+    if (parseLogLine(line, number, message)) {
       const std::size_t file = std::size_t(number / kFileLineStride);
       const std::string path = file < files.size() ? files[file] : "<file " + std::to_string(file) + ">";
-      out += path + ":" + std::to_string(number % kFileLineStride) + ": " + m[3].str() + "\n";
+      out += path + ":" + std::to_string(number % kFileLineStride) + ": " + message + "\n";
     } else if (!line.empty()) {
       out += line + "\n";
     }
