@@ -272,6 +272,9 @@ AdaptivityStats Adaptivity::adapt(const AdaptContext& ctx, bool ignoreDelay) {
       p.levelOmega[c] = p.levelOmega[o];
       p.levelNu[c] = p.levelNu[o];
       p.mOpt[c] = p.mOpt[o];
+      p.phi[c] = p.phi[o];
+      p.omega[c] = p.omega[o];
+      p.nu[c] = p.nu[o];
     }
     m_removed[o] = 1;
     m_locked[o] = 1;

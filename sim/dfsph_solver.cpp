@@ -84,7 +84,8 @@ double DfsphSolver::computeDensityAndFactor(SolverContext& ctx) {
                               // second term of alpha is V_i V_j |grad W|^2, not V_j^2 |grad W|^2: the two
                               // differ as soon as masses do, and the latter over-drives heavy particles among
                               // light
-                              sqSum += Vi * Vj * (g * xij).squaredNorm();
+                              // (written so that equal masses give exactly the uniform formula)
+                              sqSum += (Vi / Vj) * gv.squaredNorm();
                             }
                             const Real hb = pairSupport(Hi, Hb);
                             const Real sb =

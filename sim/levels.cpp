@@ -21,6 +21,8 @@ constexpr std::uint32_t kMinNeighbors = 5;
 constexpr Real kMinImbalance = Real(0.1);
 // Jacobi passes of the distance propagation are bounded: beyond this many hops the distance is capped anyway.
 constexpr int kMaxPropagationPasses = 24;
+// passes per step once phi exists: enough to follow a surface that moves less than a spacing per step
+constexpr int kPassesPerStep = 2;
 }  // namespace
 
 double levelRamp(double x, double lo, double hi) {
@@ -100,45 +102,53 @@ void LevelEstimator::detectSurface(ParticleSet& p, const NeighborList& fluidNbrs
   });
 }
 
-void LevelEstimator::propagateDistance(const ParticleSet& p, const NeighborList& fluidNbrs, Real cap,
-                                       Real hop) {
+void LevelEstimator::propagateDistance(ParticleSet& p, const NeighborList& fluidNbrs, Real cap, Real hop) {
   const std::size_t n = p.size();
-  m_phi.resize(n);
   m_phiNext.resize(n);
-  for (std::size_t i = 0; i < n; ++i)
-    m_phi[i] = (p.flags[i] & kFlagSurface) ? Real(0) : cap;
-  // Jacobi passes of phi_i = min_j (phi_j + |x_ij|): deterministic whatever the thread count. Each pass moves
-  // the front by at least one neighbour hop, so cap / hop passes reach the cap.
-  const int passes = std::min(kMaxPropagationPasses, int(std::ceil(cap / hop)) + 1);
+  // phi is kept from step to step (it moves with the particles and children inherit it), so a couple of
+  // Jacobi passes of phi_i = min_j (phi_j + |x_ij|) per step follow the moving surface: distances may shrink
+  // by two hops and grow by one hop per step. A particle without a previous value (infinity) starts at the
+  // cap, and the first call runs to convergence.
+  bool fresh = false;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (p.flags[i] & kFlagSurface) {
+      p.phi[i] = 0;
+    } else if (!(p.phi[i] < cap)) {
+      fresh |= !std::isfinite(p.phi[i]);
+      p.phi[i] = cap;
+    } else {
+      p.phi[i] = std::min(cap, p.phi[i] + hop);
+    }
+  }
+  const int passes = fresh ? std::min(kMaxPropagationPasses, int(std::ceil(cap / hop)) + 1) : kPassesPerStep;
   for (int pass = 0; pass < passes; ++pass) {
     std::atomic<bool> changed{false};
     tbb::parallel_for(Range(0, n, kGrain), [&](const Range& r) {
       bool local = false;
       for (std::size_t i = r.begin(); i < r.end(); ++i) {
-        Real best = m_phi[i];
+        Real best = p.phi[i];
         for (std::uint32_t k = fluidNbrs.offsets[i]; k < fluidNbrs.offsets[i + 1]; ++k) {
           const std::uint32_t j = fluidNbrs.indices[k];
-          if (m_phi[j] >= best)
+          if (p.phi[j] >= best)
             continue;  // cannot improve
-          best = std::min(best, m_phi[j] + (p.x[i] - p.x[j]).norm());
+          best = std::min(best, p.phi[j] + (p.x[i] - p.x[j]).norm());
         }
-        best = std::min(best, cap);
-        local |= best != m_phi[i];
+        local |= best != p.phi[i];
         m_phiNext[i] = best;
       }
       if (local)
         changed = true;
     });
-    m_phi.swap(m_phiNext);
+    p.phi.swap(m_phiNext);
     if (!changed)
       break;
   }
 }
 
-void LevelEstimator::vorticityAndVelocityDifference(const ParticleSet& p, const NeighborList& fluidNbrs) {
+void LevelEstimator::vorticityAndVelocityDifference(ParticleSet& p, const NeighborList& fluidNbrs) {
   const std::size_t n = p.size();
-  m_omega.resize(n);
-  m_nu.resize(n);
+  m_rawOmega.resize(n);
+  m_rawNu.resize(n);
   tbb::parallel_for(Range(0, n, kGrain), [&](const Range& r) {
     for (std::size_t i = r.begin(); i < r.end(); ++i) {
       const Vec3 xi = p.x[i];
@@ -160,8 +170,29 @@ void LevelEstimator::vorticityAndVelocityDifference(const ParticleSet& p, const 
         num += volume * vji.norm() * w;
         den += volume * w;
       }
-      m_omega[i] = curl.norm() / p.rho[i];
-      m_nu[i] = den > Real(0) ? num / den : Real(0);
+      m_rawOmega[i] = curl.norm() / p.rho[i];
+      m_rawNu[i] = den > Real(0) ? num / den : Real(0);
+    }
+  });
+  // Both are then averaged over the kernel (Shepard): the SPH curl of a disordered particle set carries noise
+  // of the order of the velocity fluctuation over the support, which the raw values would mistake for
+  // vortices.
+  tbb::parallel_for(Range(0, n, kGrain), [&](const Range& r) {
+    for (std::size_t i = r.begin(); i < r.end(); ++i) {
+      const Real self = p.m[i] / p.rho[i] * CubicSpline::w0(p.H[i]);
+      Real omega = self * m_rawOmega[i];
+      Real nu = self * m_rawNu[i];
+      Real den = self;
+      for (std::uint32_t k = fluidNbrs.offsets[i]; k < fluidNbrs.offsets[i + 1]; ++k) {
+        const std::uint32_t j = fluidNbrs.indices[k];
+        const Real w =
+            p.m[j] / p.rho[j] * CubicSpline::w((p.x[i] - p.x[j]).norm(), pairSupport(p.H[i], p.H[j]));
+        omega += w * m_rawOmega[j];
+        nu += w * m_rawNu[j];
+        den += w;
+      }
+      p.omega[i] = omega / den;
+      p.nu[i] = nu / den;
     }
   });
 }
@@ -180,18 +211,18 @@ void LevelEstimator::compute(ParticleSet& p, const NeighborList& fluidNbrs, cons
   if (dynamic) {
     vorticityAndVelocityDifference(p, fluidNbrs);
   } else {
-    m_omega.assign(n, Real(0));
-    m_nu.assign(n, Real(0));
+    std::fill(p.omega.begin(), p.omega.end(), Real(0));
+    std::fill(p.nu.begin(), p.nu.end(), Real(0));
   }
   target.resize(n);
   tbb::parallel_for(Range(0, n, kGrain), [&](const Range& rg) {
     for (std::size_t i = rg.begin(); i < rg.end(); ++i) {
-      const double rPhi = visibleLevel(m_phi[i], lo, hi);
+      const double rPhi = visibleLevel(p.phi[i], lo, hi);
       double rOmega = 1.0;
       double rNu = 1.0;
       if (dynamic) {
-        rOmega = refinementLevel(m_omega[i], params.vorticityLo, params.vorticityHi, params.vorticityRmax);
-        rNu = refinementLevel(m_nu[i], params.velocityDifferenceLo, params.velocityDifferenceHi,
+        rOmega = refinementLevel(p.omega[i], params.vorticityLo, params.vorticityHi, params.vorticityRmax);
+        rNu = refinementLevel(p.nu[i], params.velocityDifferenceLo, params.velocityDifferenceHi,
                               params.velocityDifferenceRmax);
       }
       p.levelPhi[i] = Real(rPhi);
@@ -203,7 +234,7 @@ void LevelEstimator::compute(ParticleSet& p, const NeighborList& fluidNbrs, cons
 }
 
 std::size_t LevelEstimator::memoryBytes() const {
-  return (m_phi.capacity() + m_phiNext.capacity() + m_omega.capacity() + m_nu.capacity()) * sizeof(Real);
+  return (m_phiNext.capacity() + m_rawOmega.capacity() + m_rawNu.capacity()) * sizeof(Real);
 }
 
 }  // namespace fp::sim

@@ -29,32 +29,25 @@ Real supportForMass(Real m, Real mFine, Real fineRadius);
 /// Computes the levels of every particle. Owns its scratch arrays.
 class LevelEstimator {
  public:
-  /// Fills flags (kFlagSurface), levelPhi, levelOmega, levelNu of `p` and the unsmoothed optimal mass of
-  /// every particle into `target`, from the neighbour lists and densities of the current step. `mFine` is the
-  /// finest mass [kg].
+  /// Fills flags (kFlagSurface), phi, omega, nu (zero in the surface mode), levelPhi, levelOmega, levelNu of
+  /// `p` and the unsmoothed optimal mass of every particle into `target`, from the neighbour lists and
+  /// densities of the current step. `mFine` is the finest mass [kg].
   void compute(ParticleSet& p, const NeighborList& fluidNbrs, const NeighborList& boundaryNbrs,
                const BoundarySet& boundary, const SimParams& params, AdaptivityMode mode, Real mFine,
                std::vector<Real>& target);
 
-  /// distance to the free surface of the last compute, capped at surface_distance_hi [m]
-  const std::vector<Real>& surfaceDistance() const { return m_phi; }
-  /// vorticity magnitude of the last compute [1/s] (zero in the surface mode)
-  const std::vector<Real>& vorticity() const { return m_omega; }
-  /// velocity difference of the last compute [m/s] (zero in the surface mode)
-  const std::vector<Real>& velocityDifference() const { return m_nu; }
   /// bytes held
   std::size_t memoryBytes() const;
 
  private:
   void detectSurface(ParticleSet& p, const NeighborList& fluidNbrs, const NeighborList& boundaryNbrs,
                      const BoundarySet& boundary);
-  void propagateDistance(const ParticleSet& p, const NeighborList& fluidNbrs, Real cap, Real hop);
-  void vorticityAndVelocityDifference(const ParticleSet& p, const NeighborList& fluidNbrs);
+  void propagateDistance(ParticleSet& p, const NeighborList& fluidNbrs, Real cap, Real hop);
+  void vorticityAndVelocityDifference(ParticleSet& p, const NeighborList& fluidNbrs);
 
-  std::vector<Real> m_phi;
   std::vector<Real> m_phiNext;
-  std::vector<Real> m_omega;
-  std::vector<Real> m_nu;
+  std::vector<Real> m_rawOmega;
+  std::vector<Real> m_rawNu;
 };
 
 }  // namespace fp::sim

@@ -34,14 +34,14 @@ struct SimParams {
   bool divergenceSolve = true;       ///< run the divergence-free solve
   bool warmStart = true;             ///< warm-start both solves with the previous step's stiffness
   // adaptivity (METHOD.md sections 4 and 5); used by the surface and fluidplaying modes
-  double massRatio = 27.0;            ///< m_base / m_fine: mass of the coarsest particles over the finest [-]
-  double surfaceDistanceLo = 4.0;     ///< phi below this is fully fine (R_phi = 0) [fine radii r]
-  double surfaceDistanceHi = 16.0;    ///< phi above this is fully coarse (R_phi = 1) [fine radii r]
-  double vorticityLo = 12.0;          ///< omega below this does not refine (R_omega = 1) [1/s]
-  double vorticityHi = 30.0;          ///< omega above this refines fully (R_omega = Rmax) [1/s]
-  double vorticityRmax = 8.0;         ///< largest vorticity level Rmax_omega [-]
-  double velocityDifferenceLo = 0.3;  ///< nu below this does not refine (R_nu = 1) [m/s]
-  double velocityDifferenceHi = 0.6;  ///< nu above this refines fully (R_nu = Rmax) [m/s]
+  double massRatio = 27.0;          ///< m_base / m_fine: mass of the coarsest particles over the finest [-]
+  double surfaceDistanceLo = 2.0;   ///< phi below this is fully fine (R_phi = 0) [fine radii r]
+  double surfaceDistanceHi = 12.0;  ///< phi above this is fully coarse (R_phi = 1) [fine radii r]
+  double vorticityLo = 6.0;         ///< omega below this does not refine (R_omega = 1) [1/s]
+  double vorticityHi = 14.0;        ///< omega above this refines fully (R_omega = Rmax) [1/s]
+  double vorticityRmax = 8.0;       ///< largest vorticity level Rmax_omega [-]
+  double velocityDifferenceLo = 0.35;   ///< nu below this does not refine (R_nu = 1) [m/s]
+  double velocityDifferenceHi = 0.7;    ///< nu above this refines fully (R_nu = Rmax) [m/s]
   double velocityDifferenceRmax = 8.0;  ///< largest velocity-difference level Rmax_nu [-]
   double massSmoothing =
       0.25;  ///< share of the new optimal mass taken per adaptation step (1: no smoothing) [-]

@@ -2,6 +2,8 @@
 
 #include <tbb/parallel_for.h>
 
+#include <limits>
+
 namespace fp::sim {
 
 template <class F>
@@ -21,6 +23,9 @@ void ParticleSet::forEachField(F&& f) {
   f(levelOmega, m_scratchReal);
   f(levelNu, m_scratchReal);
   f(mOpt, m_scratchReal);
+  f(phi, m_scratchReal);
+  f(omega, m_scratchReal);
+  f(nu, m_scratchReal);
   f(heavySteps, m_scratchU32);
 }
 
@@ -41,6 +46,9 @@ std::size_t ParticleSet::add(const Vec3& position, const Vec3& velocity, Real ma
   levelOmega.push_back(1);
   levelNu.push_back(1);
   mOpt.push_back(mass);
+  phi.push_back(std::numeric_limits<Real>::infinity());
+  omega.push_back(0);
+  nu.push_back(0);
   heavySteps.push_back(0);
   return x.size() - 1;
 }
@@ -99,6 +107,9 @@ std::size_t ParticleSet::memoryBytes() const {
   count(levelOmega);
   count(levelNu);
   count(mOpt);
+  count(phi);
+  count(omega);
+  count(nu);
   count(heavySteps);
   bytes += m_scratchVec.capacity() * sizeof(Vec3) + m_scratchReal.capacity() * sizeof(Real) +
            m_scratchU32.capacity() * sizeof(std::uint32_t);

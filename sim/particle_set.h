@@ -33,6 +33,9 @@ class ParticleSet {
   std::vector<Real> levelOmega;           ///< vorticity level R_omega in [1, Rmax] [-]
   std::vector<Real> levelNu;              ///< velocity-difference level R_nu in [1, Rmax] [-]
   std::vector<Real> mOpt;                 ///< optimal (target) mass of the adaptivity [kg]
+  std::vector<Real> phi;                  ///< distance to the free surface, capped (adaptivity) [m]
+  std::vector<Real> omega;                ///< vorticity magnitude of the last adaptation step [1/s]
+  std::vector<Real> nu;                   ///< velocity difference of the last adaptation step [m/s]
   std::vector<std::uint32_t> heavySteps;  ///< consecutive adaptation steps found too heavy (split delay)
 
   /// number of particles

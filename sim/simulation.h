@@ -127,8 +127,6 @@ class Simulation {
   bool adaptive() const {
     return m_mode == AdaptivityMode::Surface || m_mode == AdaptivityMode::FluidPlaying;
   }
-  /// the level estimator, with phi, omega and nu of the last adaptation step
-  const LevelEstimator& levels() const { return m_levels; }
 
  private:
   void createFluid();

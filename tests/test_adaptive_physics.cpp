@@ -91,7 +91,7 @@ TEST(AdaptivePhysicsTest, PropellerDrawsFineParticlesIntoItsVorticesUnlikeSurfac
   SceneDesc scene = fp::engine::loadScene(std::string(FP_SOURCE_DIR) + "/assets/scenes/propeller.json");
   // the propeller's region, below the band of the surface: there only vorticity and shear can refine
   auto nearPropeller = [](const Vec3& x) {
-    return std::abs(x.x()) < 0.12f && Vec3(0, x.y() - 0.17f, x.z()).norm() < 0.1f;
+    return std::abs(x.x()) < 0.12f && Vec3(0, x.y() - 0.17f, x.z()).norm() < 0.08f;
   };
   double meanMass[2] = {0.0, 0.0};
   const AdaptivityMode modes[2] = {AdaptivityMode::Surface, AdaptivityMode::FluidPlaying};

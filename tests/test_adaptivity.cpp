@@ -207,7 +207,8 @@ TEST(AdaptivityTest, OrientationChoiceLowersTheSplitDensityErrorSmall) {
   const double reduction = 1.0 - chosen / unrotated;
   // the paper reports 15.5 %; with 8 candidates we measure about 55 % on these neighbourhoods
   EXPECT_GT(reduction, 0.3) << "mean split error reduction " << reduction;
-  std::printf("split error reduction by orientation: %.1f %% over %llu splits\n", 100.0 * reduction, (unsigned long long)compared);
+  std::printf("split error reduction by orientation: %.1f %% over %llu splits\n", 100.0 * reduction,
+              (unsigned long long)compared);
   EXPECT_LT(reduction, 1.0);
 }
 

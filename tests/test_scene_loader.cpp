@@ -436,3 +436,38 @@ TEST(SceneLoaderTest, MissingSceneFile) {
 
 }  // namespace
 }  // namespace fp::engine
+
+namespace fp::engine {
+
+TEST(SceneLoaderTest, ModeDefaultsToUniformHighAndParses) {
+  EXPECT_EQ(parseScene(validScene().dump(), "ok.json", "").mode, sim::AdaptivityMode::UniformHigh);
+  json s = validScene();
+  s["mode"] = "surface";
+  EXPECT_EQ(parseScene(s.dump(), "ok.json", "").mode, sim::AdaptivityMode::Surface);
+  EXPECT_EQ(loadScene(scenePath("propeller.json")).mode, sim::AdaptivityMode::FluidPlaying);
+  EXPECT_EQ(loadScene(scenePath("propeller_hires.json")).params.particleRadius, 0.005);
+}
+
+TEST(SceneLoaderTest, BadModeNamesThePathAndTheChoices) {
+  json s = validScene();
+  s["mode"] = "adaptive";
+  const std::string message = errorOf(s);
+  EXPECT_TRUE(namesPath(message, "$.mode"));
+  EXPECT_TRUE(contains(message, "uniform-low, uniform-high, surface, fluidplaying")) << message;
+  s["mode"] = 3;
+  EXPECT_TRUE(namesPath(errorOf(s), "$.mode"));
+}
+
+TEST(SceneLoaderTest, AdaptivityIntervalMustBeOrdered) {
+  json s = validScene();
+  s["parameters"]["vorticity_lo"] = 40.0;
+  s["parameters"]["vorticity_hi"] = 20.0;
+  const std::string message = errorOf(s);
+  EXPECT_TRUE(namesPath(message, "$.parameters"));
+  EXPECT_TRUE(contains(message, "vorticity_lo")) << message;
+  s = validScene();
+  s["parameters"]["split_max_children"] = 40;
+  EXPECT_TRUE(namesPath(errorOf(s), "$.parameters.split_max_children"));
+}
+
+}  // namespace fp::engine

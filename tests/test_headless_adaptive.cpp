@@ -1,0 +1,56 @@
+// The headless runner with the resolution modes: --mode overrides the scene, and the stats JSON reports the
+// adaptivity's figures under the names scripts and the benchmark read.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <string>
+
+namespace {
+
+namespace fs = std::filesystem;
+
+nlohmann::json runWithStats(const std::string& mode) {
+  const fs::path stats =
+      fs::temp_directory_path() / ("fp_headless_" + mode + "_" + std::to_string(getpid()) + ".json");
+  const std::string cmd = std::string(FP_FLUIDPLAYING_EXE) + " --headless --quiet --scene " + FP_SOURCE_DIR +
+                          "/assets/scenes/tiny_dam_break.json --sim-time 0.4 --mode " + mode + " --stats " +
+                          stats.string() + " > /dev/null 2>&1";
+  const int status = std::system(cmd.c_str());
+  EXPECT_EQ(status, 0) << cmd;
+  std::ifstream file(stats);
+  nlohmann::json j = nlohmann::json::parse(file, nullptr, false);
+  fs::remove(stats);
+  return j;
+}
+
+}  // namespace
+
+TEST(HeadlessAdaptiveTest, StatsReportTheAdaptivity) {
+  const nlohmann::json a = runWithStats("fluidplaying");
+  ASSERT_TRUE(a.is_object());
+  EXPECT_EQ(a["mode"], "fluidplaying");
+  for (const char* key : {"splits", "merges", "redistributions", "split_error_reduction", "adaptivity_share",
+                          "particles_mean", "particles_max", "particles_final", "density_error_mean"})
+    EXPECT_TRUE(a.contains(key)) << key;
+  EXPECT_GT(a["splits"].get<double>() + a["merges"].get<double>(), 0.0);
+  EXPECT_GT(a["redistributions"].get<double>(), 0.0);
+  const double reduction = a["split_error_reduction"].get<double>();
+  EXPECT_GE(reduction, 0.0);
+  EXPECT_LT(reduction, 1.0);
+  const double share = a["adaptivity_share"].get<double>();
+  EXPECT_GT(share, 0.0);
+  EXPECT_LT(share, 0.5);
+
+  const nlohmann::json u = runWithStats("uniform-high");
+  ASSERT_TRUE(u.is_object());
+  EXPECT_EQ(u["mode"], "uniform-high");
+  EXPECT_EQ(u["splits"].get<double>() + u["merges"].get<double>() + u["redistributions"].get<double>(), 0.0);
+  EXPECT_EQ(u["adaptivity_share"].get<double>(), 0.0);
+  // the same water in both modes, fewer particles in the adaptive one
+  EXPECT_NEAR(a["mass_initial"].get<double>(), u["mass_initial"].get<double>(), 1e-9);
+  EXPECT_LT(a["particles_mean"].get<double>(), u["particles_mean"].get<double>());
+}
