@@ -45,8 +45,8 @@ Real supportForMass(Real m, Real mFine, Real fineRadius) {
   return Real(4) * fineRadius * std::cbrt(m / mFine);
 }
 
-void LevelEstimator::detectSurface(ParticleSet& p, const NeighborList& fluidNbrs,
-                                   const NeighborList& boundaryNbrs, const BoundarySet& boundary) {
+void detectSurface(ParticleSet& p, const NeighborList& fluidNbrs, const NeighborList& boundaryNbrs,
+                   const BoundarySet& boundary) {
   const std::size_t n = p.size();
   const Real Hb = boundary.support();
   tbb::parallel_for(Range(0, n, kGrain), [&](const Range& r) {

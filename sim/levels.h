@@ -26,6 +26,12 @@ double optimalMass(double rPhi, double rOmega, double rNu, double mFine, double 
 /// the same number of neighbours on their own lattice [m]
 Real supportForMass(Real m, Real mFine, Real fineRadius);
 
+/// Flags (kFlagSurface) the particles on the free surface: the cone test of Winchenbach et al. 2017 on
+/// volume-weighted neighbour directions, boundary particles counting as neighbours. Used by the levels and by
+/// the splash post-process.
+void detectSurface(ParticleSet& p, const NeighborList& fluidNbrs, const NeighborList& boundaryNbrs,
+                   const BoundarySet& boundary);
+
 /// Computes the levels of every particle. Owns its scratch arrays.
 class LevelEstimator {
  public:
@@ -40,8 +46,6 @@ class LevelEstimator {
   std::size_t memoryBytes() const;
 
  private:
-  void detectSurface(ParticleSet& p, const NeighborList& fluidNbrs, const NeighborList& boundaryNbrs,
-                     const BoundarySet& boundary);
   void propagateDistance(ParticleSet& p, const NeighborList& fluidNbrs, Real cap, Real hop);
   void vorticityAndVelocityDifference(ParticleSet& p, const NeighborList& fluidNbrs);
 

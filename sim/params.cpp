@@ -88,6 +88,18 @@ ParamTable::ParamTable() {
       "most mass a merge or share receiver gains per adaptation step (share of its own)", &P::transferRate);
   add("support_blend_steps", "adaptivity", "steps", I, 0, 100, true,
       "steps over which a changed support radius is blended in (0: at once)", &P::supportBlendSteps);
+  add("splash_enabled", "splash", "-", B, 0, 1, true, "generate splash particles (render only)",
+      &P::splashEnabled);
+  add("splash_neighbors", "splash", "-", I, 1, 200, true,
+      "N_splash: surface particles with fewer neighbours spawn splash", &P::splashNeighbors);
+  add("splash_count", "splash", "-", I, 0, 64, true, "n_splash: splash particles per spawning particle",
+      &P::splashCount);
+  add("splash_alpha_min", "splash", "r", R, 0.0, 20.0, true, "alpha_min: smallest offset (particle radii)",
+      &P::splashAlphaMin);
+  add("splash_alpha_max", "splash", "r", R, 0.0, 20.0, true, "alpha_max: largest offset (particle radii)",
+      &P::splashAlphaMax);
+  add("splash_noise", "splash", "-", R, 0.0, 10.0, true, "n_r_max: length of the random direction added",
+      &P::splashNoise);
   add("max_speed", "robustness", "m/s", R, 0.1, 1000.0, true,
       "speed above which the run is reported unstable", &P::maxSpeed);
   add("seed", "robustness", "-", ParamKind::Seed, 0, 4294967295.0, false, "seed of every random choice",
@@ -173,6 +185,8 @@ std::string ParamTable::validate(const SimParams& p) {
     return "vorticity_lo must be below vorticity_hi";
   if (p.velocityDifferenceLo >= p.velocityDifferenceHi)
     return "velocity_difference_lo must be below velocity_difference_hi";
+  if (p.splashAlphaMin > p.splashAlphaMax)
+    return "splash_alpha_min must not exceed splash_alpha_max";
   if (!(p.mergeBelow < p.lightBelow && p.shareAbove < p.splitAbove))
     return "the thresholds must keep merge_below < light_below <= 1 <= share_above < split_above";
   return {};

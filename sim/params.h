@@ -55,6 +55,13 @@ struct SimParams {
   double splitAbove = 1.99;       ///< m / m_opt at or above this: too heavy, split [-]
   double transferRate = 0.05;     ///< most mass a receiver gains per adaptation step, share of its own [-]
   int supportBlendSteps = 10;  ///< steps over which a changed support radius is blended in (0: at once) [-]
+  // splash enhancement (METHOD.md section 6): a render-only post-process, never fed back into the simulation
+  bool splashEnabled = true;    ///< generate splash particles
+  int splashNeighbors = 20;     ///< N_splash: surface particles with fewer fluid neighbours spawn splash [-]
+  int splashCount = 4;          ///< n_splash: temporary particles per spawning particle [-]
+  double splashAlphaMin = 0.5;  ///< alpha_min: smallest offset from the particle [its radii]
+  double splashAlphaMax = 3.0;  ///< alpha_max: largest offset from the particle [its radii]
+  double splashNoise = 0.5;     ///< n_r_max: length of the random direction added to the outward one [-]
   // robustness
   double maxSpeed = 50.0;  ///< a fluid particle faster than this is reported as an instability [m/s]
   std::uint64_t seed = 1;  ///< seed of every random choice (sampling jitter, split orientations) [-]
