@@ -30,7 +30,7 @@ Eigen::AlignedBox3f sceneViewBox(const sim::Simulation& simulation) {
 }
 
 HeadlessRender::HeadlessRender(const CliOptions& options)
-    : m_outDir(options.outDir), m_width(options.width), m_height(options.height) {
+    : m_spray(!options.noSpray), m_outDir(options.outDir), m_width(options.width), m_height(options.height) {
   std::error_code ec;
   std::filesystem::create_directories(m_outDir, ec);
   if (ec || !std::filesystem::is_directory(m_outDir))
@@ -50,7 +50,7 @@ HeadlessRender::HeadlessRender(const CliOptions& options)
     if (s.highlightSplits)
       s.highlightDuration = float(*options.highlightTime);
   }
-  s.showSpray = !options.noSpray;
+  s.showSpray = m_spray;
 }
 
 HeadlessRender::~HeadlessRender() = default;
@@ -59,7 +59,8 @@ const std::string& HeadlessRender::contextDescription() const {
   return m_context->description();
 }
 
-void HeadlessRender::renderFrame(int frame, const sim::Simulation& simulation) {
+void HeadlessRender::renderFrame(int frame, const sim::Simulation& simulation,
+                                 const sim::SplashParticles* splash) {
   const auto start = std::chrono::steady_clock::now();
   const float aspect = float(m_width) / float(m_height);
   if (!m_framed) {
@@ -67,7 +68,13 @@ void HeadlessRender::renderFrame(int frame, const sim::Simulation& simulation) {
     m_camera.frame(box.min(), box.max(), aspect);
     m_framed = true;
   }
-  m_renderer->update(render::frameDataOf(simulation));
+  render::SpraySpan spray;
+  if (m_spray) {
+    const sim::SplashParticles& s = splash ? *splash : m_splash.generate(simulation, std::uint64_t(frame));
+    spray = render::SpraySpan{s.x.data(), s.radius.data(), s.size()};
+  }
+  m_sprayCount = spray.count;
+  m_renderer->update(render::frameDataOf(simulation, spray));
   render::RenderTarget target;
   target.width = m_width;
   target.height = m_height;

@@ -1,6 +1,7 @@
 #pragma once
 /// The headless renderer: an OSMesa context with no display, the fluid renderer and a camera that frames the
-/// scene; called with every frame of the headless run, it writes one PNG a frame.
+/// scene; called with every frame of the headless run, it writes one PNG a frame, with the frame's splash
+/// particles (sim/splash.h) drawn as spray unless --no-spray was given.
 
 #include <memory>
 #include <string>
@@ -8,6 +9,7 @@
 #include "engine/cli.h"
 #include "render/camera.h"
 #include "sim/simulation.h"
+#include "sim/splash.h"
 
 namespace fp::render {
 class OffscreenContext;
@@ -27,13 +29,18 @@ class HeadlessRender {
   HeadlessRender(const HeadlessRender&) = delete;
   HeadlessRender& operator=(const HeadlessRender&) = delete;
 
-  /// Renders the simulation's current state as frame `frame`; the first call frames the scene.
-  void renderFrame(int frame, const sim::Simulation& simulation);
+  /// Renders the simulation's current state as frame `frame`; the first call frames the scene. The spray is
+  /// `splash` when given (the caller already generated this frame's splash), else generated here from the
+  /// simulation with frame index `frame`; nothing is generated or drawn with --no-spray.
+  void renderFrame(int frame, const sim::Simulation& simulation,
+                   const sim::SplashParticles* splash = nullptr);
 
   /// "OSMesa, 4.5 (Core Profile) Mesa 22.3.6, llvmpipe (...)"
   const std::string& contextDescription() const;
   /// images written so far
   int imagesWritten() const { return m_written; }
+  /// splash particles drawn in the last frame
+  std::size_t sprayCount() const { return m_sprayCount; }
   /// mean wall time of rendering and writing one image [ms]
   double meanMilliseconds() const { return m_written ? m_totalMs / m_written : 0.0; }
 
@@ -41,6 +48,9 @@ class HeadlessRender {
   std::unique_ptr<render::OffscreenContext> m_context;
   std::unique_ptr<render::FluidRenderer> m_renderer;
   render::OrbitCamera m_camera;
+  sim::SplashGenerator m_splash;
+  bool m_spray = true;
+  std::size_t m_sprayCount = 0;
   bool m_framed = false;
   std::string m_outDir;
   int m_width = 0;

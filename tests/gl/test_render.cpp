@@ -1,7 +1,8 @@
 // Image tests of the renderer (label gl), through OSMesa with no display. A small fixed scene (a
 // 2,250-particle water block in a glass tank, 160x120 pixels) is rendered and measured in numbers: coverage
 // of the projected fluid, red pixels of split children, spray pixels, a reference image under a stated
-// tolerance, and the errors of missing or broken shaders.
+// tolerance, the errors of missing or broken shaders, and the headless renderer (PNG frames, splash as
+// spray).
 #include <gtest/gtest.h>
 
 #include <cstdlib>
@@ -10,6 +11,8 @@
 #include <memory>
 #include <sstream>
 
+#include "engine/headless_render.h"
+#include "engine/scene_loader.h"
 #include "render/fluid_renderer.h"
 #include "render/image.h"
 #include "render/offscreen_context.h"
@@ -389,4 +392,33 @@ TEST(HeadlessRenderTest, WritesPngFramesWithNoDisplay) {
   text << in.rdbuf();
   EXPECT_NE(text.str().find("shader file not found: /nonexistent/shaders/"), std::string::npos) << text.str();
   EXPECT_FALSE(fs::exists(dir2 / "frame_00000.png"));
+}
+
+TEST(HeadlessRenderTest, ADamBreakFrameWithSplashHasSprayPixels) {
+  // the tiny dam break when its front has run up the far wall and sprays
+  sim::Simulation simulation(
+      engine::loadScene(std::string(FP_SOURCE_DIR) + "/assets/scenes/tiny_dam_break.json"));
+  while (simulation.time() < 0.4)
+    simulation.step();
+  const int frame = 24;
+  auto renderTo = [&](const std::string& name, bool noSpray) {
+    engine::CliOptions o;
+    o.outDir = (fs::path(::testing::TempDir()) / name).string();
+    o.width = kWidth;
+    o.height = kHeight;
+    o.noSpray = noSpray;
+    engine::HeadlessRender r(o);
+    r.renderFrame(frame, simulation);
+    return std::make_pair(render::readPng(o.outDir + "/frame_00024.png"), r.sprayCount());
+  };
+  const auto [with, sprayCount] = renderTo("fp_headless_spray_on", false);
+  const auto [without, noCount] = renderTo("fp_headless_spray_off", true);
+  EXPECT_GT(sprayCount, 0u);
+  EXPECT_EQ(noCount, 0u);
+  EXPECT_GE(changedPixels(with, without, 12).size(), 20u);
+  // splash_enabled = false draws no spray either
+  simulation.params().splashEnabled = false;
+  const auto [disabled, disabledCount] = renderTo("fp_headless_spray_disabled", false);
+  EXPECT_EQ(disabledCount, 0u);
+  EXPECT_EQ(changedPixels(disabled, without, 0).size(), 0u);
 }
