@@ -12,6 +12,7 @@
 #include "sim/dfsph_solver.h"
 #include "sim/kernels.h"
 #include "sim/levels.h"
+#include "sim/simulation.h"
 #include "sim/split_templates.h"
 
 using namespace fp::sim;
@@ -232,4 +233,74 @@ TEST(AdaptivityTest, SupportsBlendTowardsTheirMassSmall) {
   for (int k = 0; k < 40; ++k)
     Adaptivity::blendSupports(p, params, mf);
   EXPECT_EQ(p.H[0], target);
+}
+
+TEST(LevelsTest, SurfaceOfARestingBlockIsItsTopFaceAndPhiGrowsWithDepthSmall) {
+  // a block of water at rest in a closed tank: its free surface is the top face only (walls are not a
+  // surface)
+  SceneDesc scene;
+  scene.params.particleRadius = 0.1 / 10.4;  // puts the lattice 2.4 r from the walls, where they hold it
+  ColliderDesc tank;
+  tank.shape = ShapeType::Box;
+  tank.container = true;
+  tank.halfExtents = Vec3d(0.1, 0.15, 0.1);
+  tank.position = Vec3d(0, 0.15, 0);
+  scene.colliders.push_back(tank);
+  scene.fluid.push_back(FluidBlock{Aabb(Vec3d(-0.1, 0, -0.1), Vec3d(0.1, 0.24, 0.1)), Vec3d::Zero()});
+  scene.domain = Aabb(Vec3d(-0.15, -0.05, -0.15), Vec3d(0.15, 0.35, 0.15));
+  Simulation sim(scene);
+  sim.step();  // uniform resolution: the lists of the step still index the particles
+  ParticleSet p = sim.particles();
+  const Real r = Real(scene.params.particleRadius);
+  Real top = 0;
+  for (const Vec3& x : p.x)
+    top = std::max(top, x.y());
+  SimParams params = scene.params;
+  std::vector<Real> target;
+  LevelEstimator levels;
+  levels.compute(p, sim.fluidNeighbors(), sim.boundaryNeighbors(), sim.boundary(), params,
+                 AdaptivityMode::FluidPlaying, sim.latticeMass(), target);
+  int topLayer = 0, topFlagged = 0, interior = 0, interiorFlagged = 0;
+  // mean phi per lattice layer below the top, in spacings
+  std::vector<double> phiSum(8, 0.0);
+  std::vector<int> phiCount(8, 0);
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const bool surface = p.flags[i] & kFlagSurface;
+    const Real depth = top - p.x[i].y();
+    if (depth < r) {
+      ++topLayer;
+      topFlagged += surface;
+    } else if (depth > Real(3) * r) {
+      // deeper than the top layer, walls and floor included
+      ++interior;
+      interiorFlagged += surface;
+    }
+    const int layer = int(std::lround(depth / (2 * r)));
+    if (layer < 8 && std::abs(p.x[i].x()) < 0.05f && std::abs(p.x[i].z()) < 0.05f) {
+      phiSum[std::size_t(layer)] += p.phi[i];
+      ++phiCount[std::size_t(layer)];
+    }
+  }
+  ASSERT_GT(topLayer, 40);
+  ASSERT_GT(interior, 300);
+  EXPECT_GT(topFlagged, 0.95 * topLayer) << topFlagged << " of " << topLayer;
+  EXPECT_LT(interiorFlagged, 0.01 * interior) << interiorFlagged << " of " << interior;
+  // phi: zero on top, one spacing more per layer, capped at surface_distance_hi
+  EXPECT_NEAR(phiSum[0] / phiCount[0], 0.0, 0.1 * r);
+  const double cap = params.surfaceDistanceHi * r;
+  for (int layer = 1; layer < 8; ++layer) {
+    ASSERT_GT(phiCount[std::size_t(layer)], 0);
+    const double mean = phiSum[std::size_t(layer)] / phiCount[std::size_t(layer)];
+    EXPECT_NEAR(mean, std::min(cap, 2.0 * r * layer), 0.2 * r) << "layer " << layer;
+  }
+  // R_phi and the optimal mass follow: finest on top, coarsest below the cap
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    if (p.phi[i] >= Real(cap) * Real(0.999)) {
+      EXPECT_NEAR(p.levelPhi[i], 1.0f, 2e-3f);
+      EXPECT_NEAR(target[i], sim.latticeMass() * Real(params.massRatio), 2e-3f * target[i]);
+    }
+    if (p.flags[i] & kFlagSurface) {
+      EXPECT_EQ(target[i], sim.latticeMass());
+    }
+  }
 }
