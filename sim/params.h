@@ -57,7 +57,7 @@ struct SimParams {
   int supportBlendSteps = 10;  ///< steps over which a changed support radius is blended in (0: at once) [-]
   // splash enhancement (METHOD.md section 6): a render-only post-process, never fed back into the simulation
   bool splashEnabled = true;    ///< generate splash particles
-  int splashNeighbors = 20;     ///< N_splash: surface particles with fewer fluid neighbours spawn splash [-]
+  int splashNeighbors = 12;     ///< N_splash: surface particles with fewer fluid neighbours spawn splash [-]
   int splashCount = 4;          ///< n_splash: temporary particles per spawning particle [-]
   double splashAlphaMin = 0.5;  ///< alpha_min: smallest offset from the particle [its radii]
   double splashAlphaMax = 3.0;  ///< alpha_max: largest offset from the particle [its radii]

@@ -35,6 +35,11 @@ double latticeKernelSum(double H, double d) {
   return sum;
 }
 
+/// Initial coarse blocks may be this much heavier than their points' optimal masses: below the split threshold,
+/// so they are only "heavy" and share mass down gradually, which starts the run near the resolution the
+/// adaptation settles at instead of with a thick band of fine particles to merge.
+constexpr double kInitialHeaviness = 1.9;
+
 std::string formatVec(const Vec3& v) {
   std::ostringstream s;
   s << "(" << v.x() << ", " << v.y() << ", " << v.z() << ")";
@@ -170,7 +175,7 @@ void Simulation::coarsenInitialLattice(const std::vector<Eigen::Vector4i>& latti
   // Cubic blocks of e^3 lattice points become one particle at their centre of mass: on a lattice of such
   // blocks this reproduces the rest density exactly. Uniform-low merges every block of the largest edge
   // (e^3 <= mass ratio), partial blocks at the borders included. The adaptive modes merge, largest edge
-  // first, the full blocks whose every point may be that coarse (block mass at most 1.5 times each point's
+  // first, the full blocks whose every point may be that coarse (block mass at most kInitialHeaviness times each point's
   // optimal mass), so they start graded from fine at the surface to coarse deep down, with no burst of merges
   // at the first step.
   const std::size_t n = m_fluid.size();
@@ -204,13 +209,15 @@ void Simulation::coarsenInitialLattice(const std::vector<Eigen::Vector4i>& latti
     for (std::size_t id = 0; id < n; ++id) {
       const std::size_t key = keyOf(lattice[id]);
       ++members[key];
-      if (groupOf[id] != kNone || blockMass > Real(1.5) * target[id])
+      if (groupOf[id] != kNone || blockMass > Real(kInitialHeaviness) * target[id])
         ok[key] = 0;
     }
     std::vector<std::int32_t> groupOfKey(first.back(), kNone);
     for (std::size_t key = 0; key < members.size(); ++key) {
-      const bool full = members[key] == std::uint32_t(e * e * e);
-      if (ok[key] && members[key] > 0 && (full || !adaptive()))
+      // Blocks cut by a wall (the lattice keeps 2.2 r from colliders) merge too when at least half full:
+      // otherwise a slab of fine particles three layers thick would line every wall.
+      const bool fullEnough = 2 * members[key] >= std::uint32_t(e * e * e);
+      if (ok[key] && members[key] > 0 && (fullEnough || !adaptive()))
         groupOfKey[key] = groups++;
     }
     for (std::size_t id = 0; id < n; ++id) {

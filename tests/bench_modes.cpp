@@ -1,27 +1,39 @@
-/// fp_bench_modes: the paper's comparison. Runs one scene (default: the propeller) for the same simulated
+/// fp_bench_modes: the paper's experiment. Runs one scene (default: the propeller) for the same simulated
 /// time in each resolution mode, one after the other in this process, and prints one table row per mode plus
-/// the same figures as CSV: wall time and speed-up against uniform-high, mean and max particle count as a
-/// share of uniform-high, mean density error, the density error decrease from choosing split orientations,
-/// and the share of step time spent on levels and adaptation.
+/// the same figures as CSV: wall time of the simulation steps and speed-up against uniform-high, mean and max
+/// particle count as a share of uniform-high, the splash height (the mass-weighted 99.9th-percentile fluid
+/// height above the mode's resting level: its mean over the frames and its maximum, without and with the
+/// splash particles), splash particles per frame, the mean density error, the density error decrease from
+/// choosing split orientations, and the share of step time spent on levels and adaptation. With --out it also
+/// writes the CSV, the per-frame series, SVG plots of the particle count and the splash height over time, and
+/// (with
+/// --images) one rendered image per mode at the same instant, side by side like the paper's figure 3.
 ///
 ///   fp_bench_modes [--scene FILE] [--sim-time S] [--modes a,b,..] [--threads T] [--set KEY=VALUE]...
-///                  [--csv FILE] [--quick] [--help]
+///                  [--csv FILE] [--out DIR [--images] [--image-time S]] [--quick] [--help]
 
 #include <tbb/global_control.h>
 #include <tbb/info.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <memory>
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "engine/cli.h"
+#include "engine/headless_render.h"
 #include "engine/scene_loader.h"
+#include "render/image.h"
 #include "sim/simulation.h"
+#include "sim/splash.h"
 
 namespace {
 
@@ -32,8 +44,19 @@ const char* const kDefaultScene = FP_SOURCE_DIR "/assets/scenes/propeller.json";
 constexpr double kDefaultSimTime = 2.0;
 constexpr double kQuickSimTime = 0.3;
 
+/// One frame of a run.
+struct Sample {
+  double t = 0;               // simulated time [s]
+  std::size_t particles = 0;  // fluid particles
+  double height = 0;          // 99.9th-percentile fluid height above the resting level [m]
+  double heightSplash = 0;    // the same with the splash particles [m]
+  std::size_t splash = 0;     // splash particles
+};
+
 struct Row {
   std::string mode;
+  std::vector<Sample> series;
+  double heightMean = 0, heightMax = 0, heightSplashMean = 0, heightSplashMax = 0, splashMean = 0;
   std::string status = "ok";
   double wall = 0;
   std::uint64_t steps = 0;
@@ -44,6 +67,106 @@ struct Row {
   double adaptivityShare = 0;
 };
 
+/// The height below which 99.9 % of the weight lies. Weighted by mass, so that modes with fewer, heavier
+/// particles are measured on the same water (an unweighted percentile of a tenth as many particles sits
+/// nearer the maximum).
+double heightPercentile(std::vector<std::pair<double, double>>& yw) {
+  if (yw.empty())
+    return 0.0;
+  std::sort(yw.begin(), yw.end());
+  double total = 0.0;
+  for (const auto& [y, w] : yw)
+    total += w;
+  double below = 0.0;
+  for (const auto& [y, w] : yw) {
+    below += w;
+    if (below >= 0.999 * total)
+      return y;
+  }
+  return yw.back().first;
+}
+
+/// frame heights: the fluid alone and with the splash particles, each weighing its source's mass / n_splash
+void frameHeights(const sim::ParticleSet& p, const sim::SplashParticles& splash, int perSource, double& fluid,
+                  double& withSplash) {
+  std::vector<std::pair<double, double>> yw;
+  yw.reserve(p.size() + splash.size());
+  for (std::size_t i = 0; i < p.size(); ++i)
+    yw.emplace_back(double(p.x[i].y()), double(p.m[i]));
+  std::vector<std::pair<double, double>> all = yw;
+  fluid = heightPercentile(yw);
+  for (std::size_t k = 0; k < splash.size(); ++k)
+    all.emplace_back(double(splash.x[k].y()), double(p.m[splash.source[k]]) / std::max(1, perSource));
+  withSplash = heightPercentile(all);
+}
+
+std::string machineDescription() {
+  std::ifstream cpu("/proc/cpuinfo");
+  std::string line;
+  std::string model = "unknown CPU";
+  while (std::getline(cpu, line)) {
+    if (line.rfind("model name", 0) == 0) {
+      model = line.substr(line.find(':') + 2);
+      break;
+    }
+  }
+  return model + ", " + std::to_string(std::thread::hardware_concurrency()) + " hardware threads";
+}
+
+/// An SVG line plot of one series per mode over time.
+void writePlot(const std::string& path, const std::string& title, const std::string& unit,
+               const std::vector<Row>& rows, double (*value)(const Sample&)) {
+  const double w = 720, h = 400, left = 70, right = 150, top = 40, bottom = 50;
+  double tMax = 0, vMin = 0, vMax = 0;
+  for (const Row& r : rows)
+    for (const Sample& s : r.series) {
+      tMax = std::max(tMax, s.t);
+      vMax = std::max(vMax, value(s));
+      vMin = std::min(vMin, value(s));
+    }
+  if (tMax <= 0)
+    tMax = 1;
+  if (vMax <= vMin)
+    vMax = vMin + 1;
+  auto px = [&](double t) { return left + (w - left - right) * t / tMax; };
+  auto py = [&](double v) { return h - bottom - (h - top - bottom) * (v - vMin) / (vMax - vMin); };
+  const char* colours[] = {"#888888", "#1f77b4", "#ff7f0e", "#d62728", "#2ca02c", "#9467bd"};
+  std::ofstream f(path);
+  f << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << w << "\" height=\"" << h
+    << "\" font-family=\"sans-serif\" font-size=\"12\">\n<rect width=\"100%\" height=\"100%\" "
+       "fill=\"white\"/>\n";
+  f << "<text x=\"" << left << "\" y=\"22\" font-size=\"15\">" << title << "</text>\n";
+  f << "<line x1=\"" << left << "\" y1=\"" << h - bottom << "\" x2=\"" << w - right << "\" y2=\""
+    << h - bottom << "\" stroke=\"black\"/>\n<line x1=\"" << left << "\" y1=\"" << top << "\" x2=\"" << left
+    << "\" y2=\"" << h - bottom << "\" stroke=\"black\"/>\n";
+  for (int k = 0; k <= 4; ++k) {
+    const double t = tMax * k / 4.0;
+    const double v = vMin + (vMax - vMin) * k / 4.0;
+    char label[64];
+    std::snprintf(label, sizeof(label), "%.2f", t);
+    f << "<text x=\"" << px(t) << "\" y=\"" << h - bottom + 18 << "\" text-anchor=\"middle\">" << label
+      << "</text>\n";
+    std::snprintf(label, sizeof(label), "%.4g", v);
+    f << "<text x=\"" << left - 6 << "\" y=\"" << py(v) + 4 << "\" text-anchor=\"end\">" << label
+      << "</text>\n";
+    f << "<line x1=\"" << left << "\" y1=\"" << py(v) << "\" x2=\"" << w - right << "\" y2=\"" << py(v)
+      << "\" stroke=\"#e0e0e0\"/>\n";
+  }
+  f << "<text x=\"" << (left + w - right) / 2 << "\" y=\"" << h - 10
+    << "\" text-anchor=\"middle\">simulated time [s]</text>\n";
+  f << "<text x=\"16\" y=\"" << (top + h - bottom) / 2 << "\" transform=\"rotate(-90 16 "
+    << (top + h - bottom) / 2 << ")\" text-anchor=\"middle\">" << unit << "</text>\n";
+  for (std::size_t m = 0; m < rows.size(); ++m) {
+    const char* c = colours[m % 6];
+    f << "<polyline fill=\"none\" stroke=\"" << c << "\" stroke-width=\"1.5\" points=\"";
+    for (const Sample& s : rows[m].series)
+      f << px(s.t) << "," << py(value(s)) << " ";
+    f << "\"/>\n<text x=\"" << w - right + 10 << "\" y=\"" << top + 16 * (m + 1) << "\" fill=\"" << c << "\">"
+      << rows[m].mode << "</text>\n";
+  }
+  f << "</svg>\n";
+}
+
 std::string usage() {
   return "usage: fp_bench_modes [--scene FILE] [--sim-time S] [--modes LIST] [--threads T] [--set "
          "KEY=VALUE]...\n"
@@ -53,7 +176,11 @@ std::string usage() {
          "  --modes LIST     comma-separated modes (default uniform-low,uniform-high,surface,fluidplaying)\n"
          "  --threads T      worker threads (default: all cores)\n"
          "  --set KEY=VALUE  override a parameter of the scene, e.g. --set particle_radius=0.006\n"
-         "  --csv FILE       also write the table as CSV\n";
+         "  --csv FILE       also write the table as CSV\n"
+         "  --out DIR        write DIR/modes_<scene>.csv, the per-frame series, SVG plots and (--images) "
+         "images\n"
+         "  --images         render one image per mode at --image-time (default: the end), side by side\n"
+         "  --image-time S   simulated time of the images\n";
 }
 
 double parsePositive(const std::string& flag, const std::string& text) {
@@ -69,19 +196,62 @@ double parsePositive(const std::string& flag, const std::string& text) {
   return v;
 }
 
-Row runMode(sim::SceneDesc scene, sim::AdaptivityMode mode, double simTime) {
+/// Runs one mode. The wall time counts the simulation only: frame sampling, splash and rendering are timed
+/// out.
+Row runMode(sim::SceneDesc scene, sim::AdaptivityMode mode, double simTime, double imageTime,
+            engine::HeadlessRender* render, sim::SplashParticles* imageSplash) {
   scene.mode = mode;
   Row row;
   row.mode = sim::modeName(mode);
-  const auto start = Clock::now();
   sim::Simulation simulation(scene);
+  sim::SplashGenerator splash;
+  double rest = 0.0;
+  int frame = 0;
+  bool imageDone = false;
+  auto sample = [&]() {
+    const sim::SplashParticles& sp = splash.generate(simulation, std::uint64_t(frame));
+    Sample s;
+    s.t = simulation.time();
+    s.particles = simulation.particles().size();
+    s.splash = sp.size();
+    frameHeights(simulation.particles(), sp, scene.params.splashCount, s.height, s.heightSplash);
+    if (frame == 0)
+      rest = s.height;  // the resting level: this mode's own initial surface
+    s.height -= rest;
+    s.heightSplash -= rest;
+    row.series.push_back(s);
+    if (render && !imageDone && simulation.time() >= imageTime - 1e-9) {
+      render->renderFrame(0, simulation, &sp);
+      if (imageSplash)
+        *imageSplash = sp;
+      imageDone = true;
+    }
+    ++frame;
+  };
+  const double frameDt = 1.0 / scene.frameRate;
+  double wall = 0.0;
+  sample();
   try {
-    while (simulation.time() < simTime - 1e-12)
+    while (simulation.time() < simTime - 1e-12) {
+      const auto start = Clock::now();
       simulation.step();
+      wall += std::chrono::duration<double>(Clock::now() - start).count();
+      if (simulation.time() >= frame * frameDt - 1e-12)
+        sample();
+    }
   } catch (const sim::InstabilityError& e) {
     row.status = e.what();
   }
-  row.wall = std::chrono::duration<double>(Clock::now() - start).count();
+  if (render && !imageDone)
+    render->renderFrame(0, simulation);
+  row.wall = wall;
+  for (const Sample& s : row.series) {
+    row.heightMean += s.height / double(row.series.size());
+    row.heightSplashMean += s.heightSplash / double(row.series.size());
+    row.splashMean += double(s.splash) / double(row.series.size());
+    row.heightMax = std::max(row.heightMax, s.height);
+    row.heightSplashMax = std::max(row.heightSplashMax, s.heightSplash);
+  }
   const sim::RunStats& run = simulation.runStats();
   row.steps = run.steps;
   row.particlesMean = run.steps ? double(run.particleSteps) / double(run.steps) : 0.0;
@@ -99,6 +269,9 @@ int main(int argc, char** argv) {
   std::string scenePath = kDefaultScene;
   double simTime = kDefaultSimTime;
   std::string csvPath;
+  std::string outDir;
+  bool images = false;
+  double imageTime = -1.0;
   int threads = 0;
   std::vector<std::pair<std::string, double>> overrides;
   std::vector<sim::AdaptivityMode> modes = {sim::AdaptivityMode::UniformLow, sim::AdaptivityMode::UniformHigh,
@@ -125,6 +298,12 @@ int main(int argc, char** argv) {
         threads = int(parsePositive(a, value()));
       } else if (a == "--csv") {
         csvPath = value();
+      } else if (a == "--out") {
+        outDir = value();
+      } else if (a == "--images") {
+        images = true;
+      } else if (a == "--image-time") {
+        imageTime = parsePositive(a, value());
       } else if (a == "--set") {
         const std::string kv = value();
         const std::size_t eq = kv.find('=');
@@ -169,45 +348,132 @@ int main(int argc, char** argv) {
     threads = int(tbb::info::default_concurrency());
   tbb::global_control control(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
 
-  std::printf("fp_bench_modes: %s, r = %g m, mass ratio %g, %g s simulated per mode, %d threads\n",
-              scene.name.c_str(), scene.params.particleRadius, scene.params.massRatio, simTime, threads);
+  if (images && outDir.empty()) {
+    std::cerr << "fp_bench_modes: --images needs --out DIR\n";
+    return engine::kExitUsage;
+  }
+  if (imageTime < 0 || imageTime > simTime)
+    imageTime = simTime;
+  std::string stem = std::filesystem::path(scenePath).stem().string();
+  for (const auto& [key, v] : overrides) {
+    std::ostringstream tag;
+    tag << "_" << key << v;
+    stem += tag.str();
+  }
+  if (!outDir.empty()) {
+    std::error_code ec;
+    std::filesystem::create_directories(outDir, ec);
+    if (ec) {
+      std::cerr << "fp_bench_modes: " << outDir << ": cannot create (" << ec.message() << ")\n";
+      return engine::kExitInput;
+    }
+  }
+  const std::string machine = machineDescription();
+  std::printf(
+      "fp_bench_modes: %s, r = %g m, mass ratio %g, %g s simulated per mode, %d threads\nmachine: %s\n",
+      scene.name.c_str(), scene.params.particleRadius, scene.params.massRatio, simTime, threads,
+      machine.c_str());
   std::vector<Row> rows;
+  std::vector<std::string> imagePaths;
   for (sim::AdaptivityMode m : modes) {
     std::fprintf(stderr, "  running %s ...\n", sim::modeName(m));
-    rows.push_back(runMode(scene, m, simTime));
+    std::unique_ptr<engine::HeadlessRender> render;
+    if (images) {
+      engine::CliOptions options;
+      options.render = true;
+      options.width = 640;
+      options.height = 360;
+      options.outDir = (std::filesystem::path(outDir) / (stem + "_" + sim::modeName(m))).string();
+      try {
+        render = std::make_unique<engine::HeadlessRender>(options);
+      } catch (const std::exception& e) {
+        std::cerr << "fp_bench_modes: no images: " << e.what() << "\n";
+        return engine::kExitInput;
+      }
+      imagePaths.push_back((std::filesystem::path(options.outDir) / "frame_00000.png").string());
+    }
+    rows.push_back(runMode(scene, m, simTime, imageTime, render.get(), nullptr));
   }
   const Row* high = nullptr;
   for (const Row& r : rows)
     if (r.mode == "uniform-high")
       high = &r;
 
-  std::printf("\n%-13s %9s %7s %8s %10s %7s %9s %7s %10s %10s %9s\n", "mode", "wall [s]", "speedup", "steps",
-              "particles", "share", "max", "share", "dens.err%", "orient.-%", "adapt.%");
+  std::printf("\n%-13s %9s %7s %8s %10s %7s %9s %7s %9s %9s %9s %9s %8s %9s %9s %8s\n", "mode", "wall [s]",
+              "speedup", "steps", "particles", "share", "max", "share", "h99.9 mm", "max mm", "+spl. mm",
+              "max mm", "splash", "dens.err%", "orient.-%", "adapt.%");
   std::ostringstream csv;
   csv << "mode,status,wall_s,speedup_vs_uniform_high,steps,particles_mean,particles_mean_share,particles_max,"
-         "particles_max_share,density_error_mean,split_error_reduction,adaptivity_share,splits,merges,"
-         "redistributions\n";
+         "particles_max_share,splash_height_mean_m,splash_height_max_m,splash_height_with_splash_mean_m,"
+         "splash_height_with_splash_max_m,splash_particles_mean,density_error_mean,split_error_reduction,"
+         "adaptivity_share,splits,merges,redistributions,sim_time_s,particle_radius_m,threads,machine\n";
   bool allOk = true;
   for (const Row& r : rows) {
     const double speedup = high && r.wall > 0 ? high->wall / r.wall : 0.0;
     const double meanShare = high && high->particlesMean > 0 ? r.particlesMean / high->particlesMean : 0.0;
     const double maxShare =
         high && high->particlesMax > 0 ? double(r.particlesMax) / double(high->particlesMax) : 0.0;
-    std::printf("%-13s %9.2f %7.2f %8llu %10.0f %6.1f%% %9zu %6.1f%% %10.3f %10.1f %9.1f\n", r.mode.c_str(),
-                r.wall, speedup, (unsigned long long)r.steps, r.particlesMean, 100 * meanShare,
-                r.particlesMax, 100 * maxShare, 100 * r.densityError,
-                100 * r.adaptivity.splitErrorReduction(), 100 * r.adaptivityShare);
+    std::printf(
+        "%-13s %9.2f %7.2f %8llu %10.0f %6.1f%% %9zu %6.1f%% %9.1f %9.1f %9.1f %9.1f %8.0f %9.3f %9.1f "
+        "%8.1f\n",
+        r.mode.c_str(), r.wall, speedup, (unsigned long long)r.steps, r.particlesMean, 100 * meanShare,
+        r.particlesMax, 100 * maxShare, 1000 * r.heightMean, 1000 * r.heightMax, 1000 * r.heightSplashMean,
+        1000 * r.heightSplashMax, r.splashMean, 100 * r.densityError,
+        100 * r.adaptivity.splitErrorReduction(), 100 * r.adaptivityShare);
     if (r.status != "ok") {
       std::printf("  %s: %s\n", r.mode.c_str(), r.status.c_str());
       allOk = false;
     }
     csv << r.mode << "," << (r.status == "ok" ? "ok" : "unstable") << "," << r.wall << "," << speedup << ","
         << r.steps << "," << r.particlesMean << "," << meanShare << "," << r.particlesMax << "," << maxShare
-        << "," << r.densityError << "," << r.adaptivity.splitErrorReduction() << "," << r.adaptivityShare
-        << "," << r.adaptivity.splits << "," << r.adaptivity.merges << "," << r.adaptivity.redistributions
-        << "\n";
+        << "," << r.heightMean << "," << r.heightMax << "," << r.heightSplashMean << "," << r.heightSplashMax
+        << "," << r.splashMean << "," << r.densityError << "," << r.adaptivity.splitErrorReduction() << ","
+        << r.adaptivityShare << "," << r.adaptivity.splits << "," << r.adaptivity.merges << ","
+        << r.adaptivity.redistributions << "," << simTime << "," << scene.params.particleRadius << ","
+        << threads << ",\"" << machine << "\"\n";
   }
   std::printf("\nCSV\n%s", csv.str().c_str());
+  if (!outDir.empty()) {
+    const std::filesystem::path dir(outDir);
+    if (csvPath.empty())
+      csvPath = (dir / ("modes_" + stem + ".csv")).string();
+    std::ofstream series(dir / ("series_" + stem + ".csv"));
+    series << "mode,t_s,particles,splash_height_m,splash_height_with_splash_m,splash_particles\n";
+    for (const Row& r : rows)
+      for (const Sample& x : r.series)
+        series << r.mode << "," << x.t << "," << x.particles << "," << x.height << "," << x.heightSplash
+               << "," << x.splash << "\n";
+    writePlot((dir / ("particles_" + stem + ".svg")).string(),
+              "Fluid particles over time (" + scene.name + ")", "particles", rows,
+              [](const Sample& x) { return double(x.particles); });
+    writePlot((dir / ("splash_height_" + stem + ".svg")).string(),
+              "99.9th-percentile height above the resting level (" + scene.name + ")", "height [mm]", rows,
+              [](const Sample& x) { return 1000.0 * x.height; });
+    if (images) {
+      // the modes' images side by side, in the order of the table
+      render::Image strip;
+      std::vector<render::Image> parts;
+      for (const std::string& path : imagePaths)
+        parts.push_back(render::readPng(path));
+      strip.height = parts.empty() ? 0 : parts[0].height;
+      for (const render::Image& im : parts)
+        strip.width += im.width;
+      strip.rgba.assign(std::size_t(strip.width) * std::size_t(strip.height) * 4, 0);
+      int x0 = 0;
+      for (const render::Image& im : parts) {
+        for (int y = 0; y < std::min(im.height, strip.height); ++y)
+          std::copy(im.rgba.begin() + std::ptrdiff_t(std::size_t(y) * std::size_t(im.width) * 4),
+                    im.rgba.begin() + std::ptrdiff_t(std::size_t(y + 1) * std::size_t(im.width) * 4),
+                    strip.rgba.begin() +
+                        std::ptrdiff_t((std::size_t(y) * std::size_t(strip.width) + std::size_t(x0)) * 4));
+        x0 += im.width;
+      }
+      const std::string stripPath = (dir / ("modes_" + stem + ".png")).string();
+      render::writePng(stripPath, strip);
+      std::printf("images: %s (left to right: the table's modes at t = %g s)\n", stripPath.c_str(),
+                  imageTime);
+    }
+  }
   if (!csvPath.empty()) {
     std::ofstream file(csvPath);
     file << csv.str();

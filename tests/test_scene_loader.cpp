@@ -173,7 +173,7 @@ TEST(SceneLoaderTest, PropellerLoads) {
     GTEST_SKIP() << "assets/meshes/propeller.obj is not there yet";
   }
   const sim::SceneDesc scene = loadScene(scenePath("propeller.json"));
-  EXPECT_DOUBLE_EQ(scene.params.particleRadius, 0.008);
+  EXPECT_DOUBLE_EQ(scene.params.particleRadius, 0.0088);
   EXPECT_DOUBLE_EQ(scene.simTime, 4.0);
   ASSERT_EQ(scene.colliders.size(), 2u);
   const sim::ColliderDesc& prop = scene.colliders[1];
@@ -445,7 +445,7 @@ TEST(SceneLoaderTest, ModeDefaultsToUniformHighAndParses) {
   s["mode"] = "surface";
   EXPECT_EQ(parseScene(s.dump(), "ok.json", "").mode, sim::AdaptivityMode::Surface);
   EXPECT_EQ(loadScene(scenePath("propeller.json")).mode, sim::AdaptivityMode::FluidPlaying);
-  EXPECT_EQ(loadScene(scenePath("propeller_hires.json")).params.particleRadius, 0.005);
+  EXPECT_EQ(loadScene(scenePath("propeller_hires.json")).params.particleRadius, 0.00538);
 }
 
 TEST(SceneLoaderTest, BadModeNamesThePathAndTheChoices) {
