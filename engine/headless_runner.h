@@ -38,6 +38,11 @@ struct RunSummary {
   sim::Vec3d momentumFinal{0, 0, 0};    ///< "momentum_final" [kg m/s]
   std::size_t memoryBytes = 0;          ///< "memory_bytes"
   sim::PhaseTimes phases;               ///< "phase_seconds"
+  double splashParticles = 0;           ///< "splash_particles": splash particles per frame, mean
+  double splashHeight = 0;     ///< "splash_height": mean over frames of the 99.9 % mass height above rest [m]
+  double splashHeightMax = 0;  ///< "splash_height_max": its largest value [m]
+  double splashHeightWithSplash = 0;     ///< "splash_height_with_splash": the same with splash particles [m]
+  double splashHeightWithSplashMax = 0;  ///< "splash_height_with_splash_max" [m]
   sim::AdaptivityStats adaptivity;  ///< "splits", "merges", "redistributions", "split_error_reduction", ...
   double adaptivityShare = 0;       ///< "adaptivity_share": share of step time in levels and adaptation [-]
 };

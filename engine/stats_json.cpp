@@ -40,6 +40,11 @@ void writeStatsJson(const std::string& path, const RunSummary& s) {
   j["redistributions"] = s.adaptivity.redistributions;
   j["split_error_reduction"] = s.adaptivity.splitErrorReduction();
   j["adaptivity_share"] = s.adaptivityShare;
+  j["splash_particles"] = s.splashParticles;
+  j["splash_height"] = s.splashHeight;
+  j["splash_height_max"] = s.splashHeightMax;
+  j["splash_height_with_splash"] = s.splashHeightWithSplash;
+  j["splash_height_with_splash_max"] = s.splashHeightWithSplashMax;
   j["phase_seconds"] = {{"neighbors", s.phases.neighbors},   {"density", s.phases.density},
                         {"divergence", s.phases.divergence}, {"viscosity", s.phases.viscosity},
                         {"pressure", s.phases.pressure},     {"boundaries", s.phases.boundaries},

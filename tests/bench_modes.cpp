@@ -32,6 +32,7 @@
 #include "engine/headless_render.h"
 #include "engine/scene_loader.h"
 #include "render/image.h"
+#include "sim/metrics.h"
 #include "sim/simulation.h"
 #include "sim/splash.h"
 
@@ -43,6 +44,10 @@ using namespace fp;
 const char* const kDefaultScene = FP_SOURCE_DIR "/assets/scenes/propeller.json";
 constexpr double kDefaultSimTime = 2.0;
 constexpr double kQuickSimTime = 0.3;
+/// the splash height is the height below which this share of the water's mass lies
+constexpr double kHeightFraction = 0.999;
+/// simulated seconds of the still run that gives each mode's resting level
+constexpr double kDefaultRestTime = 0.5;
 
 /// One frame of a run.
 struct Sample {
@@ -57,6 +62,7 @@ struct Row {
   std::string mode;
   std::vector<Sample> series;
   double heightMean = 0, heightMax = 0, heightSplashMean = 0, heightSplashMax = 0, splashMean = 0;
+  double restLevel = 0;  // 99.9 % mass height of this mode at rest [m]
   std::string status = "ok";
   double wall = 0;
   std::uint64_t steps = 0;
@@ -66,39 +72,6 @@ struct Row {
   sim::AdaptivityStats adaptivity;
   double adaptivityShare = 0;
 };
-
-/// The height below which 99.9 % of the weight lies. Weighted by mass, so that modes with fewer, heavier
-/// particles are measured on the same water (an unweighted percentile of a tenth as many particles sits
-/// nearer the maximum).
-double heightPercentile(std::vector<std::pair<double, double>>& yw) {
-  if (yw.empty())
-    return 0.0;
-  std::sort(yw.begin(), yw.end());
-  double total = 0.0;
-  for (const auto& [y, w] : yw)
-    total += w;
-  double below = 0.0;
-  for (const auto& [y, w] : yw) {
-    below += w;
-    if (below >= 0.999 * total)
-      return y;
-  }
-  return yw.back().first;
-}
-
-/// frame heights: the fluid alone and with the splash particles, each weighing its source's mass / n_splash
-void frameHeights(const sim::ParticleSet& p, const sim::SplashParticles& splash, int perSource, double& fluid,
-                  double& withSplash) {
-  std::vector<std::pair<double, double>> yw;
-  yw.reserve(p.size() + splash.size());
-  for (std::size_t i = 0; i < p.size(); ++i)
-    yw.emplace_back(double(p.x[i].y()), double(p.m[i]));
-  std::vector<std::pair<double, double>> all = yw;
-  fluid = heightPercentile(yw);
-  for (std::size_t k = 0; k < splash.size(); ++k)
-    all.emplace_back(double(splash.x[k].y()), double(p.m[splash.source[k]]) / std::max(1, perSource));
-  withSplash = heightPercentile(all);
-}
 
 std::string machineDescription() {
   std::ifstream cpu("/proc/cpuinfo");
@@ -180,7 +153,9 @@ std::string usage() {
          "  --out DIR        write DIR/modes_<scene>.csv, the per-frame series, SVG plots and (--images) "
          "images\n"
          "  --images         render one image per mode at --image-time (default: the end), side by side\n"
-         "  --image-time S   simulated time of the images\n";
+         "  --image-time S   simulated time of the images\n"
+         "  --rest-time S    simulated seconds of the still run giving each mode's resting level (default "
+         "0.5)\n";
 }
 
 double parsePositive(const std::string& flag, const std::string& text) {
@@ -198,14 +173,38 @@ double parsePositive(const std::string& flag, const std::string& text) {
 
 /// Runs one mode. The wall time counts the simulation only: frame sampling, splash and rendering are timed
 /// out.
-Row runMode(sim::SceneDesc scene, sim::AdaptivityMode mode, double simTime, double imageTime,
+/// The resting level of a mode: the same scene with every collider held still, run for `restTime`, then the
+/// 99.9 % mass height averaged over the last fifth of it. Each mode has its own: coarse particles keep a
+/// larger distance from the floor (the wall holds them at about 2.2 of their own radii), which lifts the
+/// whole water surface by a few fine radii, and that must not count as splash.
+double restingLevel(sim::SceneDesc scene, double restTime) {
+  for (sim::ColliderDesc& c : scene.colliders) {
+    c.linearVelocity.setZero();
+    c.angularVelocity.setZero();
+    c.driven = false;
+  }
+  sim::Simulation simulation(scene);
+  double sum = 0.0;
+  int count = 0;
+  while (simulation.time() < restTime) {
+    simulation.step();
+    if (simulation.time() > 0.8 * restTime) {
+      sum += sim::heightPercentile(simulation.particles(), kHeightFraction);
+      ++count;
+    }
+  }
+  return count ? sum / count : sim::heightPercentile(simulation.particles(), kHeightFraction);
+}
+
+Row runMode(sim::SceneDesc scene, sim::AdaptivityMode mode, double simTime, double restTime, double imageTime,
             engine::HeadlessRender* render, sim::SplashParticles* imageSplash) {
   scene.mode = mode;
   Row row;
   row.mode = sim::modeName(mode);
+  const double rest = restingLevel(scene, restTime);
+  row.restLevel = rest;
   sim::Simulation simulation(scene);
   sim::SplashGenerator splash;
-  double rest = 0.0;
   int frame = 0;
   bool imageDone = false;
   auto sample = [&]() {
@@ -214,9 +213,9 @@ Row runMode(sim::SceneDesc scene, sim::AdaptivityMode mode, double simTime, doub
     s.t = simulation.time();
     s.particles = simulation.particles().size();
     s.splash = sp.size();
-    frameHeights(simulation.particles(), sp, scene.params.splashCount, s.height, s.heightSplash);
-    if (frame == 0)
-      rest = s.height;  // the resting level: this mode's own initial surface
+    s.height = sim::heightPercentile(simulation.particles(), kHeightFraction);
+    s.heightSplash =
+        sim::heightPercentile(simulation.particles(), kHeightFraction, &sp, scene.params.splashCount);
     s.height -= rest;
     s.heightSplash -= rest;
     row.series.push_back(s);
@@ -272,6 +271,7 @@ int main(int argc, char** argv) {
   std::string outDir;
   bool images = false;
   double imageTime = -1.0;
+  double restTime = kDefaultRestTime;
   int threads = 0;
   std::vector<std::pair<std::string, double>> overrides;
   std::vector<sim::AdaptivityMode> modes = {sim::AdaptivityMode::UniformLow, sim::AdaptivityMode::UniformHigh,
@@ -302,6 +302,8 @@ int main(int argc, char** argv) {
         outDir = value();
       } else if (a == "--images") {
         images = true;
+      } else if (a == "--rest-time") {
+        restTime = parsePositive(a, value());
       } else if (a == "--image-time") {
         imageTime = parsePositive(a, value());
       } else if (a == "--set") {
@@ -392,7 +394,7 @@ int main(int argc, char** argv) {
       }
       imagePaths.push_back((std::filesystem::path(options.outDir) / "frame_00000.png").string());
     }
-    rows.push_back(runMode(scene, m, simTime, imageTime, render.get(), nullptr));
+    rows.push_back(runMode(scene, m, simTime, restTime, imageTime, render.get(), nullptr));
   }
   const Row* high = nullptr;
   for (const Row& r : rows)
@@ -405,7 +407,8 @@ int main(int argc, char** argv) {
   std::ostringstream csv;
   csv << "mode,status,wall_s,speedup_vs_uniform_high,steps,particles_mean,particles_mean_share,particles_max,"
          "particles_max_share,splash_height_mean_m,splash_height_max_m,splash_height_with_splash_mean_m,"
-         "splash_height_with_splash_max_m,splash_particles_mean,density_error_mean,split_error_reduction,"
+         "splash_height_with_splash_max_m,resting_level_m,splash_particles_mean,density_error_mean,split_"
+         "error_reduction,"
          "adaptivity_share,splits,merges,redistributions,sim_time_s,particle_radius_m,threads,machine\n";
   bool allOk = true;
   for (const Row& r : rows) {
@@ -427,10 +430,10 @@ int main(int argc, char** argv) {
     csv << r.mode << "," << (r.status == "ok" ? "ok" : "unstable") << "," << r.wall << "," << speedup << ","
         << r.steps << "," << r.particlesMean << "," << meanShare << "," << r.particlesMax << "," << maxShare
         << "," << r.heightMean << "," << r.heightMax << "," << r.heightSplashMean << "," << r.heightSplashMax
-        << "," << r.splashMean << "," << r.densityError << "," << r.adaptivity.splitErrorReduction() << ","
-        << r.adaptivityShare << "," << r.adaptivity.splits << "," << r.adaptivity.merges << ","
-        << r.adaptivity.redistributions << "," << simTime << "," << scene.params.particleRadius << ","
-        << threads << ",\"" << machine << "\"\n";
+        << "," << r.restLevel << "," << r.splashMean << "," << r.densityError << ","
+        << r.adaptivity.splitErrorReduction() << "," << r.adaptivityShare << "," << r.adaptivity.splits << ","
+        << r.adaptivity.merges << "," << r.adaptivity.redistributions << "," << simTime << ","
+        << scene.params.particleRadius << "," << threads << ",\"" << machine << "\"\n";
   }
   std::printf("\nCSV\n%s", csv.str().c_str());
   if (!outDir.empty()) {

@@ -12,6 +12,7 @@
 #include "sim/dfsph_solver.h"
 #include "sim/kernels.h"
 #include "sim/levels.h"
+#include "sim/metrics.h"
 #include "sim/simulation.h"
 #include "sim/split_templates.h"
 
@@ -303,4 +304,27 @@ TEST(LevelsTest, SurfaceOfARestingBlockIsItsTopFaceAndPhiGrowsWithDepthSmall) {
       EXPECT_EQ(target[i], sim.latticeMass());
     }
   }
+}
+
+TEST(MetricsTest, HeightPercentileIsWeightedByMassSmall) {
+  ParticleSet p;
+  // 1000 equal particles at heights 0, 1, ..., 999 mm
+  for (int k = 0; k < 1000; ++k)
+    p.add(Vec3(0, Real(k) * 1e-3f, 0), Vec3::Zero(), 1.0f, 0.04f, 1000.0f);
+  EXPECT_NEAR(heightPercentile(p, 0.999), 0.998, 1e-6);
+  EXPECT_NEAR(heightPercentile(p, 0.5), 0.499, 1e-6);
+  // one particle of 1000 times the mass at the bottom holds half the water: the percentile drops to the
+  // height below which 99.9 % of the mass lies
+  p.add(Vec3(0, 0, 0), Vec3::Zero(), 1000.0f, 0.4f, 1000.0f);
+  EXPECT_NEAR(heightPercentile(p, 0.999), 0.997, 1e-6);
+  // splash counts with its source's mass over n_splash
+  SplashParticles splash;
+  for (int k = 0; k < 40; ++k) {
+    splash.x.push_back(Vec3(0, 2.0f, 0));
+    splash.radius.push_back(0.01f);
+    splash.source.push_back(999);
+  }
+  EXPECT_NEAR(heightPercentile(p, 0.999, &splash, 4), 2.0, 1e-6);     // 10 particles' worth above everything
+  EXPECT_NEAR(heightPercentile(p, 0.999, &splash, 40), 0.998, 1e-6);  // one particle's worth: below the top
+  EXPECT_EQ(heightPercentile(ParticleSet(), 0.999), 0.0);
 }

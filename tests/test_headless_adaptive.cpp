@@ -41,6 +41,13 @@ TEST(HeadlessAdaptiveTest, StatsReportTheAdaptivity) {
   const double reduction = a["split_error_reduction"].get<double>();
   EXPECT_GE(reduction, 0.0);
   EXPECT_LT(reduction, 1.0);
+  for (const char* key : {"splash_particles", "splash_height", "splash_height_max",
+                          "splash_height_with_splash", "splash_height_with_splash_max"})
+    EXPECT_TRUE(a.contains(key)) << key;
+  // the dam break throws water up: spray appears and the splash reaches above the resting level
+  EXPECT_GT(a["splash_particles"].get<double>(), 0.0);
+  EXPECT_GT(a["splash_height_max"].get<double>(), 0.01);
+  EXPECT_GE(a["splash_height_with_splash_max"].get<double>(), a["splash_height_max"].get<double>());
   const double share = a["adaptivity_share"].get<double>();
   EXPECT_GT(share, 0.0);
   EXPECT_LT(share, 0.5);
