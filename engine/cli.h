@@ -18,12 +18,12 @@ enum ExitCode : int {
 
 /// Parsed command-line options.
 struct CliOptions {
-  bool help = false;                  ///< --help
-  bool headless = false;              ///< --headless
-  std::string scenePath;              ///< --scene FILE (default: the dam break)
-  std::optional<int> frames;          ///< --frames N
-  std::optional<double> simTime;      ///< --sim-time S
-  int threads = 0;                    ///< --threads T (0: all cores)
+  bool help = false;              ///< --help
+  bool headless = false;          ///< --headless
+  std::string scenePath;          ///< --scene FILE (default: the hand tank in the window, else the dam break)
+  std::optional<int> frames;      ///< --frames N
+  std::optional<double> simTime;  ///< --sim-time S
+  int threads = 0;                ///< --threads T (0: all cores)
   std::optional<std::uint64_t> seed;  ///< --seed N
   std::string statsPath;              ///< --stats FILE.json
   std::string exportDir;              ///< --export DIR
@@ -39,6 +39,16 @@ struct CliOptions {
   std::optional<double> highlightTime;  ///< --highlight-time S: red tint of split children [s], 0 = off
   bool noSpray = false;                 ///< --no-spray
   std::string shaderDir;                ///< --shaders DIR (default: shaders/ here, else the source tree's)
+  // the app (window, and the headless hand replay)
+  std::string handScript;   ///< --hand-script FILE: replay a recorded hand (pose-track CSV)
+  double handScale = 1.0;   ///< --hand-size S: hand scale factor, in [0.5, 3]
+  bool fixedStep = false;   ///< --fixed-step: every frame advances 1 / frame_rate of simulated time
+  double timeScale = 1.0;   ///< --time-scale S: simulated seconds per wall second, in [0.05, 4]
+  std::string screenshot;   ///< --screenshot FILE.png: the last frame, panel included (window)
+  std::string recordDir;    ///< --record-frames DIR: every frame's view as PNG (window)
+  bool fullscreen = false;  ///< --fullscreen (window)
+  bool noPanel = false;     ///< --no-panel: start with the panel hidden (window)
+  bool sizeGiven = false;   ///< --width or --height was given
 };
 
 /// Parses argv; throws std::invalid_argument with a one-line message for bad input.
@@ -47,7 +57,12 @@ CliOptions parseCommandLine(const std::vector<std::string>& args);
 /// The usage text.
 std::string usage();
 
-/// The default scene: assets/scenes/dam_break.json in the working directory, else in the source tree.
+/// The default scene of the headless mode: assets/scenes/dam_break.json in the working directory, else in the
+/// source tree.
 std::string defaultScenePath();
+/// The default scene of the window: assets/scenes/hand_tank.json, found like defaultScenePath().
+std::string defaultAppScenePath();
+/// An asset path relative to the repository (e.g. "assets/hands/push.csv"): here, else in the source tree.
+std::string assetPath(const std::string& relative);
 
 }  // namespace fp::engine

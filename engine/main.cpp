@@ -1,17 +1,93 @@
-/// fluidplaying: the FluidPlaying executable. This build has the headless mode, which can also render every
-/// frame offscreen (OSMesa) to PNG; the desktop window and the OpenXR mode plug into the same loop later.
+/// fluidplaying: the FluidPlaying executable. Without --headless it opens the desktop window (real-time
+/// water, the mouse hand, the panel); with --headless it runs the headless runner, or the app loop in fixed
+/// steps when a recorded hand is replayed (--hand-script). Without a display the window mode says so in one
+/// line and runs headless instead.
+
+#include <tbb/global_control.h>
+#include <tbb/info.h>
 
 #include <iostream>
 #include <memory>
 #include <stdexcept>
 
+#include "engine/app_loop.h"
 #include "engine/cli.h"
+#include "engine/desktop_platform.h"
+#include "engine/headless_app.h"
 #include "engine/headless_render.h"
 #include "engine/headless_runner.h"
 #include "render/render_error.h"
 
+namespace {
+
+using namespace fp::engine;
+
+int runWindow(const CliOptions& options) {
+  const int threads = options.threads > 0 ? options.threads : int(tbb::info::default_concurrency());
+  tbb::global_control control(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
+  // the window and its shaders first: a missing shader stops the run before the scene is built
+  DesktopPlatform platform(options, options.frames);
+  AppSession session(sessionConfigOf(options));
+  if (!options.quiet) {
+    std::cout << "window " << platform.contextDescription() << "; scene " << session.scene().name << " ("
+              << fp::sim::modeName(session.mode()) << "), " << session.simulation().particles().size()
+              << " particles; F1 lists the controls\n";
+  }
+  const int frames = runAppLoop(session, platform, options.frames);
+  platform.finish();
+  if (!options.quiet) {
+    std::cout << "frames " << frames << ", simulated " << session.simulation().time()
+              << " s, real-time factor " << session.meanRealTimeFactor() << "\n";
+  }
+  if (!options.screenshot.empty() && !options.quiet)
+    std::cout << "screenshot " << options.screenshot << "\n";
+  return kExitOk;
+}
+
+int runHeadlessMode(const CliOptions& options) {
+  if (!options.handScript.empty()) {
+    const RunSummary summary = runHeadlessApp(options, std::cout);
+    printSummary(std::cout, summary);
+    std::cout << "momentum             " << summary.momentumFinal.transpose() << " kg m/s\n";
+    if (!options.statsPath.empty())
+      writeStatsJson(options.statsPath, summary);
+    if (summary.status != "ok") {
+      std::cerr << "fluidplaying: " << summary.message << "\n";
+      return kExitUnstable;
+    }
+    return kExitOk;
+  }
+  // The context and the shaders come first, so a missing shader stops the run before any simulation.
+  std::unique_ptr<HeadlessRender> render;
+  FrameCallback onFrame;
+  if (options.render) {
+    render = std::make_unique<HeadlessRender>(options);
+    if (!options.quiet) {
+      std::cout << "rendering " << options.width << "x" << options.height << " " << options.view
+                << " view into " << options.outDir << " (" << render->contextDescription() << ")\n";
+    }
+    onFrame = [&render](int frame, const fp::sim::Simulation& simulation) {
+      render->renderFrame(frame, simulation);
+    };
+  }
+  const RunSummary summary = runHeadless(options, std::cout, std::cerr, onFrame);
+  printSummary(std::cout, summary);
+  if (render) {
+    std::cout << "images               " << render->imagesWritten() << " (" << render->meanMilliseconds()
+              << " ms each)\n";
+  }
+  if (!options.statsPath.empty())
+    writeStatsJson(options.statsPath, summary);
+  if (summary.status != "ok") {
+    std::cerr << "fluidplaying: " << summary.message << "\n";
+    return kExitUnstable;
+  }
+  return kExitOk;
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
-  using namespace fp::engine;
   CliOptions options;
   try {
     options = parseCommandLine(std::vector<std::string>(argv + 1, argv + argc));
@@ -23,35 +99,18 @@ int main(int argc, char** argv) {
     std::cout << usage();
     return kExitOk;
   }
-  if (!options.headless) {
-    std::cerr << "fluidplaying: no window mode in this build yet; running headless\n";
-  }
   try {
-    // The context and the shaders come first, so a missing shader stops the run before any simulation.
-    std::unique_ptr<HeadlessRender> render;
-    FrameCallback onFrame;
-    if (options.render) {
-      render = std::make_unique<HeadlessRender>(options);
-      if (!options.quiet) {
-        std::cout << "rendering " << options.width << "x" << options.height << " " << options.view
-                  << " view into " << options.outDir << " (" << render->contextDescription() << ")\n";
+    if (!options.headless) {
+      try {
+        return runWindow(options);
+      } catch (const WindowUnavailable& e) {
+        // the documented fallback: the same scene (and hand script) headless, so scripts still get a result
+        std::cerr << "fluidplaying: " << e.what()
+                  << "; running headless instead (--headless skips the window)\n";
+        options.headless = true;
       }
-      onFrame = [&render](int frame, const fp::sim::Simulation& simulation) {
-        render->renderFrame(frame, simulation);
-      };
     }
-    const RunSummary summary = runHeadless(options, std::cout, std::cerr, onFrame);
-    printSummary(std::cout, summary);
-    if (render) {
-      std::cout << "images               " << render->imagesWritten() << " (" << render->meanMilliseconds()
-                << " ms each)\n";
-    }
-    if (!options.statsPath.empty())
-      writeStatsJson(options.statsPath, summary);
-    if (summary.status != "ok") {
-      std::cerr << "fluidplaying: " << summary.message << "\n";
-      return kExitUnstable;
-    }
+    return runHeadlessMode(options);
   } catch (const fp::sim::InputError& e) {
     std::cerr << "fluidplaying: " << e.what() << "\n";
     return kExitInput;
@@ -59,5 +118,4 @@ int main(int argc, char** argv) {
     std::cerr << "fluidplaying: " << e.what() << "\n";
     return kExitInput;
   }
-  return kExitOk;
 }

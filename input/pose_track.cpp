@@ -12,7 +12,8 @@ namespace fp::input {
 namespace {
 
 constexpr const char* kHeader = "time,px,py,pz,qw,qx,qy,qz,grip";
-constexpr int kColumns = 9;
+constexpr const char* kHeaderPoint = "time,px,py,pz,qw,qx,qy,qz,grip,point";
+constexpr int kMaxColumns = 10;
 
 /// Shortest decimal text that parses back to exactly `value`, independent of the C locale (unlike printf,
 /// whose decimal separator follows LC_NUMERIC).
@@ -88,8 +89,8 @@ void PoseTrack::add(const PoseSample& key) {
   if (!key.orientation.coeffs().allFinite()) {
     throw sim::InputError("pose key at t=" + formatExact(key.time) + ": orientation is not finite");
   }
-  if (!std::isfinite(key.grip)) {
-    throw sim::InputError("pose key at t=" + formatExact(key.time) + ": grip is not finite");
+  if (!std::isfinite(key.grip) || !std::isfinite(key.point)) {
+    throw sim::InputError("pose key at t=" + formatExact(key.time) + ": gesture is not finite");
   }
   if (!m_keys.empty() && !(key.time > m_keys.back().time)) {
     throw sim::InputError("pose key at t=" + formatExact(key.time) +
@@ -104,6 +105,7 @@ void PoseTrack::add(const PoseSample& key) {
   stored.time = key.time;
   stored.position = key.position;
   stored.grip = key.grip;
+  stored.point = key.point;
   stored.orientation = key.orientation;
   // Renormalise only when visibly off: dividing an already unit quaternion by its norm can move the last bit,
   // which would break the exact save/load round trip.
@@ -131,12 +133,14 @@ PoseSample PoseTrack::sample(double t) const {
     out.position = first.position;
     out.orientation = first.orientation;
     out.grip = first.grip;
+    out.point = first.point;
     return out;
   }
   if (t > last.time) {  // after the track: the last pose, at rest
     out.position = last.position;
     out.orientation = last.orientation;
     out.grip = last.grip;
+    out.point = last.point;
     return out;
   }
 
@@ -153,6 +157,7 @@ PoseSample PoseTrack::sample(double t) const {
   // (1-a)*x0 + a*x1 rather than x0 + a*(x1-x0): both ends are then reproduced exactly.
   out.position = (1.0 - a) * k0.position + a * k1.position;
   out.grip = (1.0 - a) * k0.grip + a * k1.grip;
+  out.point = (1.0 - a) * k0.point + a * k1.point;
   if (t == k1.time) {
     out.orientation = k1.orientation;  // exact key, and not its negated twin that slerp may return
   } else {
@@ -172,13 +177,16 @@ PoseTrack PoseTrack::load(const std::string& path) {
   std::string raw;
   int lineNumber = 0;
   bool headerSeen = false;
+  int columns = 9;
   while (std::getline(in, raw)) {
     ++lineNumber;
     const std::string_view line = trim(raw);
     const std::string where = path + ":" + std::to_string(lineNumber) + ": ";
     if (!headerSeen) {
-      if (line != kHeader) {
-        throw sim::InputError(where + "expected header \"" + kHeader + "\"");
+      if (line == kHeaderPoint) {
+        columns = kMaxColumns;
+      } else if (line != kHeader) {
+        throw sim::InputError(where + "expected header \"" + kHeader + "\" or \"" + kHeaderPoint + "\"");
       }
       headerSeen = true;
       continue;
@@ -187,12 +195,12 @@ PoseTrack PoseTrack::load(const std::string& path) {
       continue;  // tolerate blank lines, e.g. a trailing one added by an editor
     }
     const std::vector<std::string_view> fields = splitCommas(line);
-    if (static_cast<int>(fields.size()) != kColumns) {
-      throw sim::InputError(where + "expected " + std::to_string(kColumns) + " columns, found " +
+    if (static_cast<int>(fields.size()) != columns) {
+      throw sim::InputError(where + "expected " + std::to_string(columns) + " columns, found " +
                             std::to_string(fields.size()));
     }
-    double v[kColumns];
-    for (int c = 0; c < kColumns; ++c) {
+    double v[kMaxColumns] = {};
+    for (int c = 0; c < columns; ++c) {
       if (!parseDouble(fields[c], v[c])) {
         throw sim::InputError(where + "column " + std::to_string(c + 1) + ": bad number \"" +
                               std::string(trim(fields[c])) + "\"");
@@ -203,6 +211,7 @@ PoseTrack PoseTrack::load(const std::string& path) {
     key.position = sim::Vec3d(v[1], v[2], v[3]);
     key.orientation = sim::Quatd(v[4], v[5], v[6], v[7]);  // Eigen's constructor order is w, x, y, z
     key.grip = v[8];
+    key.point = v[9];
     try {
       track.add(key);
     } catch (const sim::InputError& e) {
@@ -220,18 +229,22 @@ void PoseTrack::save(const std::string& path) const {
   if (!out) {
     throw sim::InputError(path + ": cannot open pose track for writing");
   }
-  out << kHeader << '\n';
+  const bool point =
+      std::any_of(m_keys.begin(), m_keys.end(), [](const PoseSample& k) { return k.point != 0.0; });
+  const int columns = point ? kMaxColumns : kMaxColumns - 1;
+  out << (point ? kHeaderPoint : kHeader) << '\n';
   for (const PoseSample& k : m_keys) {
-    const double values[kColumns] = {k.time,
-                                     k.position.x(),
-                                     k.position.y(),
-                                     k.position.z(),
-                                     k.orientation.w(),
-                                     k.orientation.x(),
-                                     k.orientation.y(),
-                                     k.orientation.z(),
-                                     k.grip};
-    for (int c = 0; c < kColumns; ++c) {
+    const double values[kMaxColumns] = {k.time,
+                                        k.position.x(),
+                                        k.position.y(),
+                                        k.position.z(),
+                                        k.orientation.w(),
+                                        k.orientation.x(),
+                                        k.orientation.y(),
+                                        k.orientation.z(),
+                                        k.grip,
+                                        k.point};
+    for (int c = 0; c < columns; ++c) {
       out << (c == 0 ? "" : ",") << formatExact(values[c]);
     }
     out << '\n';

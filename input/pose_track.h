@@ -1,6 +1,7 @@
 #pragma once
-/// Recorded motion of a collider (a hand, a paddle): time-stamped poses with a gesture channel, sampled with
-/// linear and spherical interpolation, saved and loaded as a CSV text file so interactions are reproducible.
+/// Recorded motion of a collider (a hand, a paddle): time-stamped poses with two gesture channels, sampled
+/// with linear and spherical interpolation, saved and loaded as a CSV text file so interactions are
+/// reproducible.
 
 #include <string>
 #include <vector>
@@ -17,6 +18,7 @@ struct PoseSample {
   double grip = 0.0;                                ///< gesture: 0 open flat .. 1 fist [-]
   sim::Vec3d linearVelocity{0.0, 0.0, 0.0};         ///< [m/s], filled by sample()
   sim::Vec3d angularVelocity{0.0, 0.0, 0.0};        ///< [rad/s], world, filled by sample()
+  double point = 0.0;                               ///< gesture: 0 .. 1 index finger straightened [-]
 };
 
 /// A sequence of keyframes with strictly increasing times.
@@ -33,10 +35,11 @@ class PoseTrack {
   /// of the segment containing t (zero outside the track or with fewer than two keys)
   PoseSample sample(double t) const;
 
-  /// CSV: header "time,px,py,pz,qw,qx,qy,qz,grip", one keyframe a line. Throws sim::InputError naming file
-  /// and line.
+  /// CSV: header "time,px,py,pz,qw,qx,qy,qz,grip" or "time,px,py,pz,qw,qx,qy,qz,grip,point", one keyframe
+  /// a line (point is 0 without its column). Throws sim::InputError naming file and line.
   static PoseTrack load(const std::string& path);
-  /// writes the CSV; throws sim::InputError when the file cannot be written
+  /// writes the CSV, with the point column only when a key has point != 0; throws sim::InputError when the
+  /// file cannot be written
   void save(const std::string& path) const;
 
  private:

@@ -29,7 +29,8 @@ std::string versionString();
 /// Throws RenderError naming `where` when glGetError reports an error.
 void checkError(const char* where);
 
-// GL 1.0 and 1.1 entry points used by the renderer, as pointers filled by loadFunctions.
+// GL 1.0 and 1.1 entry points used by the renderer and the ImGui back-end, as pointers filled by
+// loadFunctions.
 #define FP_GL11_FUNCTIONS(X) \
   X(glBindTexture)           \
   X(glBlendFunc)             \
@@ -51,9 +52,12 @@ void checkError(const char* where);
   X(glGetFloatv)             \
   X(glGetIntegerv)           \
   X(glGetString)             \
+  X(glIsEnabled)             \
   X(glPixelStorei)           \
+  X(glPolygonMode)           \
   X(glReadBuffer)            \
   X(glReadPixels)            \
+  X(glScissor)               \
   X(glTexImage2D)            \
   X(glTexParameteri)         \
   X(glViewport)
@@ -85,9 +89,12 @@ FP_GL11_FUNCTIONS(FP_GL11_DECLARE)
 #define glGetFloatv ::fp::render::gl::p_glGetFloatv
 #define glGetIntegerv ::fp::render::gl::p_glGetIntegerv
 #define glGetString ::fp::render::gl::p_glGetString
+#define glIsEnabled ::fp::render::gl::p_glIsEnabled
 #define glPixelStorei ::fp::render::gl::p_glPixelStorei
+#define glPolygonMode ::fp::render::gl::p_glPolygonMode
 #define glReadBuffer ::fp::render::gl::p_glReadBuffer
 #define glReadPixels ::fp::render::gl::p_glReadPixels
+#define glScissor ::fp::render::gl::p_glScissor
 #define glTexImage2D ::fp::render::gl::p_glTexImage2D
 #define glTexParameteri ::fp::render::gl::p_glTexParameteri
 #define glViewport ::fp::render::gl::p_glViewport

@@ -1,0 +1,204 @@
+#pragma once
+/// The simulation side of the interactive app, shared by the desktop window, the headless hand replay and
+/// (later) the OpenXR mode: the scene and its simulation with the virtual hand attached, real-time pacing,
+/// the solver steps of a frame run as a task on the TBB workers while the caller renders the last completed
+/// state, the live parameters, hand replay and recording, and the statistics the panel plots.
+///
+/// Between frames the simulation is idle: finishSteps() joins the task, then the caller reads the state,
+/// applies its edits and starts the next frame's steps with startSteps().
+
+#include <tbb/task_group.h>
+
+#include <array>
+#include <chrono>
+#include <cstdint>
+#include <deque>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "input/hand_driver.h"
+#include "input/mouse_hand.h"
+#include "input/pose_track.h"
+#include "sim/simulation.h"
+
+namespace fp::engine {
+
+/// How a session starts.
+struct SessionConfig {
+  std::string scenePath;              ///< scene JSON
+  std::string mode;                   ///< resolution mode override (empty: the scene's)
+  std::optional<std::uint64_t> seed;  ///< seed override
+  std::string handScript;             ///< pose-track CSV replayed from simulated time 0 (empty: mouse)
+  bool fixedStep = false;             ///< every frame advances exactly 1 / frame_rate of simulated time
+  double timeScale = 1.0;             ///< simulated seconds per wall second wanted, in (0, 4]
+  double handScale = 1.0;             ///< hand size factor (1: adult)
+};
+
+/// A time series for the panel's plots: the last `capacity` values.
+class Series {
+ public:
+  /// keeps the last `capacity` values
+  explicit Series(std::size_t capacity = 300) : m_capacity(capacity) {}
+  /// appends a value, dropping the oldest beyond capacity
+  void push(float v);
+  /// the values, oldest first
+  const std::vector<float>& values() const { return m_values; }
+  /// the newest value (0 when empty)
+  float last() const { return m_values.empty() ? 0.0f : m_values.back(); }
+
+ private:
+  std::size_t m_capacity;
+  std::vector<float> m_values;
+};
+
+/// Live statistics, one sample a frame.
+struct SessionStats {
+  Series fps;              ///< frames per wall second
+  Series msPerStep;        ///< wall milliseconds per solver step
+  Series particles;        ///< fluid particle count
+  Series highShare;        ///< particle count over the uniform-high count [%]
+  Series splitsPerSecond;  ///< splits per simulated second
+  Series mergesPerSecond;  ///< merges per simulated second
+  Series densityError;     ///< mean density error of the last step [%]
+  Series realTimeFactor;   ///< simulated over wall time, smoothed
+  // the last frame
+  int steps = 0;                ///< solver steps of the last frame
+  double simMs = 0;             ///< wall time of the last frame's steps (on the workers) [ms]
+  double waitMs = 0;            ///< time the frame waited for the steps to finish [ms]
+  double frameMs = 0;           ///< wall time of the last frame [ms]
+  double uniformHighCount = 0;  ///< particles of the scene at uniform-high resolution
+};
+
+/// Requests collected during a frame and applied between frames.
+struct SessionRequests {
+  bool reset = false;                       ///< rebuild the simulation from the scene
+  bool singleStep = false;                  ///< one solver step while paused
+  std::optional<sim::AdaptivityMode> mode;  ///< rebuild in another mode
+  std::optional<std::string> scenePath;     ///< load another scene
+};
+
+/// The session. Not copyable; one per app.
+class AppSession {
+ public:
+  /// Loads the scene, attaches the hand above the water and builds the simulation. Throws sim::InputError.
+  explicit AppSession(const SessionConfig& config);
+  ~AppSession();
+  AppSession(const AppSession&) = delete;
+  AppSession& operator=(const AppSession&) = delete;
+
+  // ---- between frames (the simulation is idle) ----
+  /// Waits for the running steps; records the frame's statistics. Safe to call when none run.
+  void finishSteps();
+  /// Applies requests and edited parameters: live ones at once, the others by rebuilding the simulation.
+  void applyRequests();
+  /// Starts the steps of one frame on the TBB workers: up to the wall time `wallDt` [s] times the time scale
+  /// of simulated time (all of it in fixed-step mode), within `budget` [s] of wall time. Uses the hand pose
+  /// set by setHandTarget() (or the replay). Returns at once.
+  void startSteps(double wallDt, double budget);
+
+  /// the simulation; read it only between frames
+  const sim::Simulation& simulation() const { return *m_sim; }
+  /// the parameters as edited (applied by applyRequests)
+  sim::SimParams& editParams() { return m_params; }
+  /// requests for the next applyRequests
+  SessionRequests& requests() { return m_requests; }
+  /// the mouse hand (used when no replay runs)
+  input::MouseHand& mouseHand() { return m_mouseHand; }
+  /// the hand's geometry and colliders
+  const input::HandDriver& hand() const { return m_hand; }
+  /// the hand's current pose
+  input::HandPose handPose() const { return m_handPose; }
+  /// statistics for the panel
+  const SessionStats& stats() const { return m_stats; }
+  /// the scene as loaded (without the hand)
+  const sim::SceneDesc& scene() const { return m_scene; }
+  /// the scene file
+  const std::string& scenePath() const { return m_config.scenePath; }
+  /// the resolution mode of the running simulation
+  sim::AdaptivityMode mode() const { return m_sim->mode(); }
+  /// true when a non-live parameter or the hand size was edited and waits for a reset
+  bool restartPending() const { return m_restartPending || m_handScalePending; }
+  /// the hand size factor of the running simulation, or the edited one waiting for a reset
+  double handScale() const { return m_config.handScale; }
+  /// sets the hand size factor in [0.5, 3], applied at the next reset (the hand's colliders are rebuilt)
+  void setHandScale(double scale);
+  /// the instability report that paused the run, if any
+  const std::string& error() const { return m_error; }
+
+  bool paused = false;     ///< no steps (the hand still moves, without velocity)
+  double timeScale = 1.0;  ///< simulated seconds per wall second wanted, in (0, 4]
+  bool fixedStep = false;  ///< see SessionConfig
+
+  // ---- hand replay and recording ----
+  /// replays `track` from the current simulated time (a loaded recording)
+  void startReplay(const input::PoseTrack& track);
+  /// stops a replay; the mouse takes the hand again
+  void stopReplay();
+  /// true while a replay drives the hand
+  bool replaying() const { return m_replay.has_value(); }
+  /// starts recording the hand from the current simulated time
+  void startRecording();
+  /// stops recording and returns what was recorded
+  input::PoseTrack stopRecording();
+  /// true while recording
+  bool recording() const { return m_recording.has_value(); }
+  /// the frames' simulated-time targets keep the hand: the pose the mouse hand has now is where the hand is
+  /// at the end of the coming frame's steps
+  void setHandTarget(const input::HandPose& pose) { m_handTarget = pose; }
+
+  /// the mean real-time factor since construction or the last reset (simulated / wall time)
+  double meanRealTimeFactor() const;
+
+ private:
+  void build();
+  void runSteps(double target, double budget, bool oneStep);
+
+  SessionConfig m_config;
+  sim::SceneDesc m_scene;
+  sim::SimParams m_params;
+  sim::AdaptivityMode m_mode = sim::AdaptivityMode::UniformHigh;
+  std::unique_ptr<sim::Simulation> m_sim;
+  input::HandDriver m_hand{input::HandModel(), 0};
+  input::HandPose m_restPose;
+  input::HandPose m_handPose;
+  input::HandPose m_handTarget;
+  input::MouseHand m_mouseHand;
+  input::PoseTrack m_segment;  // this frame's hand motion: two keys, or the replay
+  std::optional<input::PoseTrack> m_replay;
+  double m_replayStart = 0.0;
+  std::optional<input::PoseTrack> m_recording;
+  double m_recordStart = 0.0;
+  SessionRequests m_requests;
+  bool m_restartPending = false;
+  bool m_singleStep = false;
+  bool m_handScalePending = false;
+  std::string m_error;
+  SessionStats m_stats;
+
+  tbb::task_group m_task;
+  bool m_running = false;
+  double m_targetTime = 0.0;
+  double m_frameStartSim = 0.0;
+  std::uint64_t m_stepsBefore = 0;
+  std::uint64_t m_splitsBefore = 0;
+  std::uint64_t m_mergesBefore = 0;
+  double m_stepWallSeconds = 0.0;  // written by the task
+  int m_taskSteps = 0;             // written by the task
+  std::string m_taskError;         // written by the task
+  double m_frameWall = 0.0;
+  double m_rtfSmoothed = 0.0;
+  double m_wallTotal = 0.0;
+  double m_simTotal = 0.0;
+  std::chrono::steady_clock::time_point m_lastFinish;
+};
+
+/// The pose the hand rests at above the water of `scene`: centred over the fluid, fingertips a little above
+/// it.
+input::HandPose restingHandPose(const sim::SceneDesc& scene, const input::HandModel& model);
+
+/// scene files listed for the panel's scene selector: assets/scenes/*.json here, else in the source tree
+std::vector<std::string> availableScenes();
+
+}  // namespace fp::engine

@@ -1,0 +1,104 @@
+#include "engine/headless_app.h"
+
+#include <tbb/global_control.h>
+#include <tbb/info.h>
+
+#include <chrono>
+#include <cmath>
+#include <ostream>
+
+#include "engine/headless_render.h"
+
+namespace fp::engine {
+
+struct HeadlessPlatform::Impl {
+  std::unique_ptr<HeadlessRender> render;
+};
+
+HeadlessPlatform::HeadlessPlatform(const CliOptions& options) : m_impl(std::make_unique<Impl>()) {
+  if (options.render)
+    m_impl->render = std::make_unique<HeadlessRender>(options);
+}
+
+HeadlessPlatform::~HeadlessPlatform() = default;
+
+void HeadlessPlatform::input(AppSession& session, double) {
+  session.setHandTarget(session.handPose());
+}
+
+void HeadlessPlatform::capture(AppSession& session, int frame) {
+  if (m_impl->render)
+    m_impl->render->renderFrame(frame, session.simulation());
+}
+
+SessionConfig sessionConfigOf(const CliOptions& options) {
+  SessionConfig c;
+  c.scenePath = options.scenePath;
+  c.mode = options.mode;
+  c.seed = options.seed;
+  c.handScript = options.handScript;
+  c.fixedStep = options.fixedStep;
+  c.timeScale = options.timeScale;
+  c.handScale = options.handScale;
+  return c;
+}
+
+RunSummary runHeadlessApp(const CliOptions& options, std::ostream& out) {
+  const int threads = options.threads > 0 ? options.threads : int(tbb::info::default_concurrency());
+  tbb::global_control control(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
+  SessionConfig config = sessionConfigOf(options);
+  config.fixedStep = true;  // no wall clock without a window: every frame is 1 / frame_rate
+  HeadlessPlatform platform(options);
+  AppSession session(config);
+  const sim::Simulation& simulation = session.simulation();
+  double simTime = session.scene().simTime;
+  if (options.simTime)
+    simTime = *options.simTime;
+  const int frames =
+      options.frames ? *options.frames : int(std::ceil(simTime * session.scene().frameRate - 1e-9));
+  RunSummary s;
+  s.scene = options.scenePath;
+  s.mode = sim::modeName(simulation.mode());
+  s.threads = threads;
+  s.seed = simulation.params().seed;
+  s.boundaryParticles = simulation.boundary().size();
+  s.massInitial = simulation.totalMass();
+  if (!options.quiet) {
+    out << "scene " << session.scene().name << " (" << s.mode << ") with the hand replaying "
+        << options.handScript << ": " << simulation.particles().size() << " fluid particles, "
+        << simulation.boundary().size() << " boundary particles, " << threads << " threads, " << frames
+        << " frames\n";
+  }
+  const auto start = std::chrono::steady_clock::now();
+  s.frames = runAppLoop(session, platform, frames);
+  s.wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const sim::Simulation& sim = session.simulation();
+  if (!session.error().empty()) {
+    s.status = "unstable";
+    s.message = session.error();
+  }
+  const sim::RunStats& run = sim.runStats();
+  s.steps = run.steps;
+  s.simSeconds = sim.time();
+  s.particlesFinal = sim.particles().size();
+  s.particlesMean = run.steps ? double(run.particleSteps) / double(run.steps) : double(s.particlesFinal);
+  s.particlesMax = std::max(run.particlesMax, s.particlesFinal);
+  s.usPerParticleStep = run.particleSteps ? s.wallSeconds * 1e6 / double(run.particleSteps) : 0.0;
+  if (run.steps) {
+    s.densityErrorMean = run.densityErrorSum / double(run.steps);
+    s.densityErrorMax = run.densityErrorMax;
+    s.densityIterationsMean = double(run.densityIterations) / double(run.steps);
+    s.divergenceIterationsMean = double(run.divergenceIterations) / double(run.steps);
+    s.neighborsMean = run.neighborsSum / double(run.steps);
+  }
+  s.massFinal = sim.totalMass();
+  s.momentumFinal = sim.totalMomentum();
+  s.memoryBytes = sim.memoryBytes();
+  s.phases = run.times;
+  s.adaptivity = run.adaptivity;
+  const double stepTime = run.times.total();
+  s.adaptivityShare = stepTime > 0 ? (run.times.levels + run.times.adaptation) / stepTime : 0.0;
+  return s;
+}
+
+}  // namespace fp::engine

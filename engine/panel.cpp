@@ -1,0 +1,347 @@
+#include "engine/panel.h"
+
+#include <imgui.h>
+
+#include <algorithm>
+#include <cfloat>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+
+#include "engine/presets.h"
+
+namespace fp::engine {
+
+namespace {
+
+// The table's groups in panel order; a group the table gains later still shows, after these.
+const char* const kGroupOrder[] = {"adaptivity", "splash", "solver", "time", "fluid", "robustness"};
+
+void plot(const char* label, const Series& s, const char* format, float lo = 0.0f) {
+  char overlay[64];
+  std::snprintf(overlay, sizeof(overlay), format, double(s.last()));
+  const std::vector<float>& v = s.values();
+  float hi = lo;
+  for (float x : v)
+    hi = std::max(hi, x);
+  ImGui::PlotLines(label, v.empty() ? nullptr : v.data(), int(v.size()), 0, overlay, lo,
+                   hi > lo ? hi * 1.1f : lo + 1.0f, ImVec2(0.0f, 36.0f));
+}
+
+void statistics(const AppSession& session) {
+  const SessionStats& s = session.stats();
+  plot("fps", s.fps, "%.1f frames/s");
+  plot("ms/step", s.msPerStep, "%.2f ms per step");
+  plot("particles", s.particles, "%.0f particles");
+  plot("of uniform-high", s.highShare, "%.1f %% of uniform-high");
+  plot("splits/s", s.splitsPerSecond, "%.0f splits per sim s");
+  plot("merges/s", s.mergesPerSecond, "%.0f merges per sim s");
+  plot("density err", s.densityError, "%.3f %% density error");
+  plot("real time", s.realTimeFactor, "x %.2f real time");
+  ImGui::Text("frame %.1f ms: %d steps, %.1f ms simulating, %.1f ms waited", s.frameMs, s.steps, s.simMs,
+              s.waitMs);
+  ImGui::Text("sim time %.3f s, uniform-high count %.0f", session.simulation().time(), s.uniformHighCount);
+}
+
+void runControls(AppSession& session, PanelState& state) {
+  const std::string current = std::filesystem::path(session.scenePath()).filename().string();
+  if (ImGui::BeginCombo("scene", current.c_str())) {
+    for (const std::string& path : state.scenes) {
+      const std::string name = std::filesystem::path(path).filename().string();
+      if (ImGui::Selectable(name.c_str(), name == current))
+        session.requests().scenePath = path;
+    }
+    ImGui::EndCombo();
+  }
+  if (ImGui::Button(session.paused ? "Run (Space)" : "Pause (Space)"))
+    session.paused = !session.paused;
+  ImGui::SameLine();
+  if (ImGui::Button("Step (N)")) {
+    session.paused = true;
+    session.requests().singleStep = true;
+  }
+  ImGui::SameLine();
+  if (ImGui::Button("Reset (R)"))
+    session.requests().reset = true;
+  float scale = float(session.timeScale);
+  if (ImGui::SliderFloat("time scale", &scale, 0.05f, 4.0f, "%.2f", ImGuiSliderFlags_Logarithmic))
+    session.timeScale = double(scale);
+  ImGui::Checkbox("fixed step (1 frame = 1/frame rate)", &session.fixedStep);
+  ImGui::Text("real-time factor %.2f%s", double(session.stats().realTimeFactor.last()),
+              session.stats().realTimeFactor.last() < 0.95f * float(session.timeScale) ? " (slowed)" : "");
+  if (ImGui::Button("Screenshot (F12)"))
+    state.screenshot = true;
+  ImGui::SameLine();
+  ImGui::Checkbox("record frames (F9)", &state.recordFrames);
+  ImGui::SameLine();
+  ImGui::Checkbox("fullscreen (F11)", &state.fullscreen);
+  if (!session.error().empty())
+    ImGui::TextColored(ImVec4(1, 0.4f, 0.3f, 1), "%s (R resets)", session.error().c_str());
+  if (session.restartPending())
+    ImGui::TextColored(ImVec4(1, 0.8f, 0.3f, 1), "parameters marked * apply on Reset");
+}
+
+void handControls(AppSession& session, PanelState& state) {
+  input::MouseHand& hand = session.mouseHand();
+  int g = int(hand.gesture().target());
+  ImGui::RadioButton("flat (1)", &g, int(input::Gesture::Flat));
+  ImGui::SameLine();
+  ImGui::RadioButton("fist (2)", &g, int(input::Gesture::Fist));
+  ImGui::SameLine();
+  ImGui::RadioButton("point (3)", &g, int(input::Gesture::Point));
+  hand.gesture().setTarget(input::Gesture(g));
+  float size = float(session.handScale());
+  if (ImGui::SliderFloat("hand size *", &size, 0.5f, 3.0f, "%.2f"))
+    session.setHandScale(double(size));
+  float turn = float(hand.yawOffset * 180.0 / M_PI);
+  if (ImGui::SliderFloat("palm turn [deg]", &turn, -90.0f, 90.0f, "%.0f"))
+    hand.yawOffset = double(turn) * M_PI / 180.0;
+  const input::HandPose p = session.handPose();
+  ImGui::Text("palm at (%.3f, %.3f, %.3f) m, grip %.2f, point %.2f", p.position.x(), p.position.y(),
+              p.position.z(), p.grip, p.point);
+  static char path[256];
+  std::snprintf(path, sizeof(path), "%s", state.recordingPath.c_str());
+  if (ImGui::InputText("recording", path, sizeof(path)))
+    state.recordingPath = path;
+  if (!session.recording()) {
+    if (ImGui::Button("Record hand (F5)"))
+      session.startRecording();
+  } else if (ImGui::Button("Stop and save (F5)")) {
+    try {
+      session.stopRecording().save(state.recordingPath);
+      state.message = "hand motion saved to " + state.recordingPath;
+    } catch (const sim::InputError& e) {
+      state.message = e.what();
+    }
+  }
+  ImGui::SameLine();
+  if (!session.replaying()) {
+    if (ImGui::Button("Replay file (F6)")) {
+      try {
+        session.startReplay(input::PoseTrack::load(state.recordingPath));
+      } catch (const sim::InputError& e) {
+        state.message = e.what();
+      }
+    }
+  } else if (ImGui::Button("Stop replay (F6)")) {
+    session.stopReplay();
+  }
+}
+
+void renderControls(render::RenderSettings& s) {
+  int view = int(s.view);
+  ImGui::RadioButton("water", &view, int(render::RenderSettings::View::Fluid));
+  ImGui::SameLine();
+  ImGui::RadioButton("particles (V)", &view, int(render::RenderSettings::View::Particles));
+  s.view = render::RenderSettings::View(view);
+  if (s.view == render::RenderSettings::View::Particles) {
+    static const char* const fields[] = {"mass", "phi", "omega", "nu", "speed", "density-error"};
+    int field = 0;
+    for (int k = 0; k < 6; ++k) {
+      if (render::parseColorField(fields[k]) == s.colorField)
+        field = k;
+    }
+    if (ImGui::Combo("colour", &field, fields, 6))
+      s.colorField = *render::parseColorField(fields[field]);
+  }
+  ImGui::Checkbox("split highlight", &s.highlightSplits);
+  ImGui::SameLine();
+  ImGui::Checkbox("spray", &s.showSpray);
+  ImGui::SameLine();
+  ImGui::Checkbox("colliders", &s.showColliders);
+  ImGui::SliderInt("filter passes", &s.filterIterations, 0, 6);
+  ImGui::SliderFloat("highlight [s]", &s.highlightDuration, 0.05f, 3.0f, "%.2f");
+}
+
+void presetControls(AppSession& session, PanelState& state) {
+  static char path[256];
+  std::snprintf(path, sizeof(path), "%s", state.presetPath.c_str());
+  if (ImGui::InputText("preset file", path, sizeof(path)))
+    state.presetPath = path;
+  if (ImGui::Button("Save preset")) {
+    try {
+      savePreset(state.presetPath, Preset{session.mode(), session.editParams()});
+      state.message = "preset saved to " + state.presetPath;
+    } catch (const sim::InputError& e) {
+      state.message = e.what();
+    }
+  }
+  ImGui::SameLine();
+  if (ImGui::Button("Load preset")) {
+    try {
+      const Preset p = loadPreset(state.presetPath, Preset{session.mode(), session.editParams()});
+      session.editParams() = p.params;
+      if (p.mode != session.mode())
+        session.requests().mode = p.mode;
+      state.message = "preset loaded from " + state.presetPath;
+    } catch (const sim::InputError& e) {
+      state.message = e.what();
+    }
+  }
+}
+
+void modeSelector(AppSession& session) {
+  static const sim::AdaptivityMode modes[] = {sim::AdaptivityMode::UniformLow,
+                                              sim::AdaptivityMode::UniformHigh, sim::AdaptivityMode::Surface,
+                                              sim::AdaptivityMode::FluidPlaying};
+  if (ImGui::BeginCombo("mode", sim::modeName(session.mode()))) {
+    for (sim::AdaptivityMode m : modes) {
+      if (ImGui::Selectable(sim::modeName(m), m == session.mode()))
+        session.requests().mode = m;
+    }
+    ImGui::EndCombo();
+  }
+  if (ImGui::IsItemHovered())
+    ImGui::SetTooltip("changing the mode rebuilds the simulation from the scene");
+}
+
+void parameterGroup(AppSession& session, const std::string& group, std::string& message) {
+  for (const sim::ParamInfo& info : sim::ParamTable::sim().entries()) {
+    if (info.group == group)
+      parameterWidget(session.editParams(), info, message);
+  }
+}
+
+}  // namespace
+
+bool parameterWidget(sim::SimParams& params, const sim::ParamInfo& info, std::string& message) {
+  const std::string label = info.key + (info.live ? "" : " *");
+  bool changed = false;
+  std::string error;
+  switch (info.kind) {
+    case sim::ParamKind::Number: {
+      double v = sim::ParamTable::getScalar(params, info);
+      const double range = info.max - info.min;
+      const float speed = float(std::max(std::abs(v) * 0.005, std::min(range, 10.0) * 1e-3));
+      if (ImGui::DragScalar(label.c_str(), ImGuiDataType_Double, &v, speed, &info.min, &info.max, "%.4g",
+                            ImGuiSliderFlags_AlwaysClamp)) {
+        error = sim::ParamTable::setScalar(params, info, v);
+        changed = error.empty();
+      }
+      break;
+    }
+    case sim::ParamKind::Integer: {
+      int v = int(sim::ParamTable::getScalar(params, info));
+      if (ImGui::DragInt(label.c_str(), &v, 0.2f, int(info.min), int(info.max), "%d",
+                         ImGuiSliderFlags_AlwaysClamp)) {
+        error = sim::ParamTable::setScalar(params, info, double(v));
+        changed = error.empty();
+      }
+      break;
+    }
+    case sim::ParamKind::Boolean: {
+      bool v = sim::ParamTable::getScalar(params, info) != 0.0;
+      if (ImGui::Checkbox(label.c_str(), &v)) {
+        error = sim::ParamTable::setScalar(params, info, v ? 1.0 : 0.0);
+        changed = error.empty();
+      }
+      break;
+    }
+    case sim::ParamKind::Vector3: {
+      std::array<double, 3> v = sim::ParamTable::getVec3(params, info);
+      if (ImGui::DragScalarN(label.c_str(), ImGuiDataType_Double, v.data(), 3, 0.05f, &info.min, &info.max,
+                             "%.3g", ImGuiSliderFlags_AlwaysClamp)) {
+        error = sim::ParamTable::setVec3(params, info, v);
+        changed = error.empty();
+      }
+      break;
+    }
+    case sim::ParamKind::Seed: {
+      ImU64 v = ImU64(sim::ParamTable::getScalar(params, info));
+      if (ImGui::InputScalar(label.c_str(), ImGuiDataType_U64, &v)) {
+        error = sim::ParamTable::setScalar(params, info, double(v));
+        changed = error.empty();
+      }
+      break;
+    }
+  }
+  if (ImGui::IsItemHovered()) {
+    ImGui::SetTooltip("%s [%s]\nrange [%g, %g]%s", info.description.c_str(), info.unit.c_str(), info.min,
+                      info.max, info.live ? "" : "\n* applies on Reset (R)");
+  }
+  if (!error.empty())
+    message = error;
+  return changed;
+}
+
+void drawPanel(AppSession& session, PanelState& state, render::RenderSettings& settings) {
+  if (!state.visible)
+    return;
+  ImGui::SetNextWindowPos(ImVec2(8, 8), ImGuiCond_FirstUseEver);
+  ImGui::SetNextWindowSize(ImVec2(400, 0), ImGuiCond_FirstUseEver);
+  ImGui::SetNextWindowSizeConstraints(ImVec2(300, 100), ImVec2(FLT_MAX, ImGui::GetIO().DisplaySize.y - 16));
+  ImGui::Begin("FluidPlaying (Tab hides, F1 help)", &state.visible);
+  ImGui::PushItemWidth(-170.0f);
+  runControls(session, state);
+  if (ImGui::CollapsingHeader("statistics", ImGuiTreeNodeFlags_DefaultOpen))
+    statistics(session);
+  if (ImGui::CollapsingHeader("hand"))
+    handControls(session, state);
+  std::vector<std::string> groups(std::begin(kGroupOrder), std::end(kGroupOrder));
+  for (const sim::ParamInfo& info : sim::ParamTable::sim().entries()) {
+    if (std::find(groups.begin(), groups.end(), info.group) == groups.end())
+      groups.push_back(info.group);
+  }
+  for (const std::string& group : groups) {
+    if (!ImGui::CollapsingHeader(group.c_str(), group == "adaptivity" ? ImGuiTreeNodeFlags_DefaultOpen : 0))
+      continue;
+    ImGui::PushID(group.c_str());
+    if (group == "adaptivity")
+      modeSelector(session);
+    parameterGroup(session, group, state.message);
+    ImGui::PopID();
+  }
+  if (ImGui::CollapsingHeader("rendering"))
+    renderControls(settings);
+  if (ImGui::CollapsingHeader("presets"))
+    presetControls(session, state);
+  if (!state.message.empty())
+    ImGui::TextWrapped("%s", state.message.c_str());
+  ImGui::PopItemWidth();
+  ImGui::End();
+}
+
+const std::vector<std::pair<const char*, const char*>>& controls() {
+  static const std::vector<std::pair<const char*, const char*>> list = {
+      {"left button (hold)", "sweep: the hand follows the cursor in a plane facing the camera"},
+      {"wheel / W, S", "hand away from / towards the camera"},
+      {"1, 2, 3 / G / side button", "flat hand, fist, point / cycle gestures / fist while held"},
+      {"Q, E", "turn the palm left / right"},
+      {"right drag", "orbit the camera"},
+      {"middle drag / Shift + right drag", "pan the camera"},
+      {"Ctrl + wheel / Z, X", "zoom in / out"},
+      {"Space / N", "pause or run / one solver step"},
+      {"R", "reset the scene (applies parameters marked *)"},
+      {"+ / -", "time scale up / down"},
+      {"V", "water or particle view"},
+      {"F5 / F6", "record the hand / replay the recording"},
+      {"F9 / F12", "record frames as PNG / screenshot"},
+      {"F11", "fullscreen"},
+      {"Tab / F1, H", "panel / this help"},
+      {"Esc", "close the help; Ctrl+Q quits"},
+  };
+  return list;
+}
+
+void drawHelp(PanelState& state) {
+  if (!state.help)
+    return;
+  const ImGuiIO& io = ImGui::GetIO();
+  ImGui::SetNextWindowPos(ImVec2(io.DisplaySize.x * 0.5f, io.DisplaySize.y * 0.5f), ImGuiCond_Always,
+                          ImVec2(0.5f, 0.5f));
+  ImGui::SetNextWindowBgAlpha(0.85f);
+  ImGui::Begin("controls", &state.help, ImGuiWindowFlags_AlwaysAutoResize | ImGuiWindowFlags_NoCollapse);
+  if (ImGui::BeginTable("keys", 2)) {
+    for (const auto& [key, action] : controls()) {
+      ImGui::TableNextRow();
+      ImGui::TableNextColumn();
+      ImGui::TextUnformatted(key);
+      ImGui::TableNextColumn();
+      ImGui::TextUnformatted(action);
+    }
+    ImGui::EndTable();
+  }
+  ImGui::End();
+}
+
+}  // namespace fp::engine
