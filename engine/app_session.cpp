@@ -89,6 +89,7 @@ void AppSession::build() {
   m_sim = std::make_unique<sim::Simulation>(scene);
   m_handPose = m_restPose;
   m_handTarget = m_restPose;
+  m_segment = input::PoseTrack();
   m_mouseHand.place(m_restPose);
   // the palm stays where the fingers remain inside the domain
   const sim::Vec3d margin(0.05, 0.3 * model.reachBelowPalm(), 0.05);
@@ -159,8 +160,10 @@ void AppSession::finishSteps() {
   }
   // where the hand is now: the motion's pose at the simulated time reached
   const double t = m_sim->time();
-  m_handPose = m_replay ? input::handPoseOf(m_replay->sample(t - m_replayStart))
-                        : input::handPoseOf(m_segment.sample(t));
+  if (m_replay)
+    m_handPose = input::handPoseOf(m_replay->sample(t - m_replayStart));
+  else if (!m_segment.keys().empty())
+    m_handPose = input::handPoseOf(m_segment.sample(t));
   if (m_recording && t - m_recordStart > m_recording->duration())
     m_recording->add(input::poseSampleOf(t - m_recordStart, m_handPose));
   if (!ran || frameWall <= 0.0)

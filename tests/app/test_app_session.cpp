@@ -1,0 +1,179 @@
+// The app session without a window: a level interval changed through the parameter table while the app loop
+// runs moves the fine particles, the real-time pacing never runs ahead of the wall clock, non-live parameters
+// wait for a reset, and presets round-trip.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+
+#include "engine/app_loop.h"
+#include "engine/app_session.h"
+#include "engine/presets.h"
+
+using namespace fp;
+using namespace fp::engine;
+
+namespace {
+
+/// A small tank, 12 cm of water at r = 8 mm: about a thousand particles at uniform-high.
+std::string smallTank(const std::string& mode) {
+  const std::string path =
+      (std::filesystem::path(::testing::TempDir()) / ("fp_app_tank_" + mode + ".json")).string();
+  std::ofstream(path) << R"({
+    "name": "small tank", "mode": ")" +
+                             mode + R"(",
+    "domain": {"min": [-0.2, -0.05, -0.2], "max": [0.2, 0.5, 0.2]},
+    "parameters": {"particle_radius": 0.008},
+    "fluid": [{"min": [-0.1, 0.0, -0.1], "max": [0.1, 0.12, 0.1]}],
+    "colliders": [{"name": "tank", "shape": "box", "container": true,
+                   "half_extents": [0.1, 0.1, 0.1], "position": [0.0, 0.1, 0.0]}]
+  })";
+  return path;
+}
+
+/// Fine particles (mass below 1.5 m_fine) deeper than `depth` below the water level (the 95th percentile of
+/// the heights, so a splash does not count as the surface).
+int fineBelow(const sim::Simulation& s, double depth) {
+  const sim::ParticleSet& p = s.particles();
+  std::vector<double> y(p.size());
+  for (std::size_t i = 0; i < p.size(); ++i)
+    y[i] = double(p.x[i].y());
+  std::nth_element(y.begin(), y.begin() + std::ptrdiff_t(0.95 * double(y.size())), y.end());
+  const double level = y[std::size_t(0.95 * double(y.size()))];
+  int n = 0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    if (double(p.m[i]) < 1.5 * double(s.latticeMass()) && double(p.x[i].y()) < level - depth)
+      ++n;
+  }
+  return n;
+}
+
+/// A platform that edits a parameter through the table at one frame, as the panel does.
+class EditingPlatform : public AppPlatform {
+ public:
+  int editFrame = 0;
+  int fineBefore = -1;
+  double depth = 0.0;
+  bool running() override { return true; }
+  void input(AppSession& session, double) override {
+    if (frame == editFrame) {
+      fineBefore = fineBelow(session.simulation(), depth);
+      const sim::ParamTable& table = sim::ParamTable::sim();
+      ASSERT_EQ(sim::ParamTable::setScalar(session.editParams(), *table.find("surface_distance_hi"), 20.0),
+                "");
+      ASSERT_EQ(sim::ParamTable::setScalar(session.editParams(), *table.find("surface_distance_lo"), 10.0),
+                "");
+    }
+    ++frame;
+  }
+  void capture(AppSession&, int) override {}
+  void draw(AppSession&, int) override {}
+
+ private:
+  int frame = 0;
+};
+
+}  // namespace
+
+TEST(AppSessionTest, LiveLevelIntervalChangeMovesFineParticlesDeeper) {
+  SessionConfig config;
+  config.scenePath = smallTank("surface");
+  config.fixedStep = true;
+  AppSession session(config);
+  const double r = session.simulation().params().particleRadius;
+  EditingPlatform platform;
+  platform.editFrame = 20;
+  platform.depth = 6.0 * r;
+  // settle with the default interval (fine only within about 2 r of the surface), then widen it to 10 r
+  runAppLoop(session, platform, 40);
+  EXPECT_EQ(session.simulation().params().surfaceDistanceLo, 10.0);  // applied live, no rebuild
+  EXPECT_FALSE(session.restartPending());
+  EXPECT_GT(session.simulation().time(), 0.6) << session.error();
+  const int fineAfter = fineBelow(session.simulation(), platform.depth);
+  EXPECT_LE(platform.fineBefore, 5);
+  EXPECT_GT(fineAfter, platform.fineBefore + 50)
+      << "fine particles below 5 r: before " << platform.fineBefore << ", after " << fineAfter;
+  EXPECT_GT(session.simulation().runStats().adaptivity.splits, 0u);
+}
+
+TEST(AppSessionTest, RealTimePacingNeverRunsAheadAndSlowsUnderABudget) {
+  SessionConfig config;
+  config.scenePath = smallTank("uniform-low");
+  AppSession session(config);
+  double wall = 0.0;
+  for (int k = 0; k < 10; ++k) {
+    session.startSteps(0.02, 1e9);
+    session.finishSteps();
+    wall += 0.02;
+    EXPECT_LE(session.simulation().time(), wall + 1e-9) << "frame " << k;
+  }
+  EXPECT_GT(session.simulation().time(), wall - 2 * session.simulation().params().dtMax);
+  // a budget too small for the frame: one step a frame, simulated time falls behind instead of stalling
+  const double t0 = session.simulation().time();
+  session.timeScale = 4.0;
+  for (int k = 0; k < 5; ++k) {
+    session.startSteps(0.05, 1e-9);
+    session.finishSteps();
+    EXPECT_EQ(session.stats().steps, 1);
+  }
+  EXPECT_LT(session.simulation().time() - t0, 5 * 0.05 * 4.0);
+  // paused: no steps, the hand keeps still
+  session.paused = true;
+  const double t1 = session.simulation().time();
+  session.startSteps(0.05, 1e9);
+  session.finishSteps();
+  EXPECT_EQ(session.simulation().time(), t1);
+}
+
+TEST(AppSessionTest, NonLiveParameterWaitsForResetAndModeChangeRebuilds) {
+  SessionConfig config;
+  config.scenePath = smallTank("uniform-high");
+  config.fixedStep = true;
+  AppSession session(config);
+  const std::size_t n0 = session.simulation().particles().size();
+  session.editParams().particleRadius = 0.01;  // not live
+  session.applyRequests();
+  EXPECT_TRUE(session.restartPending());
+  EXPECT_EQ(session.simulation().params().particleRadius, 0.008);
+  session.requests().reset = true;
+  session.applyRequests();
+  EXPECT_FALSE(session.restartPending());
+  EXPECT_EQ(session.simulation().params().particleRadius, 0.01);
+  EXPECT_LT(session.simulation().particles().size(), n0);
+  session.requests().mode = sim::AdaptivityMode::UniformLow;
+  session.applyRequests();
+  EXPECT_EQ(session.mode(), sim::AdaptivityMode::UniformLow);
+  // the hand's colliders follow the scene's: a palm and 15 segments, all driven
+  const auto& colliders = session.simulation().colliders();
+  ASSERT_EQ(colliders.size(), 17u);
+  EXPECT_EQ(colliders[session.hand().firstCollider()].desc.name, "hand_palm");
+}
+
+TEST(PresetTest, SaveLoadRoundTripAndErrors) {
+  Preset p;
+  p.mode = sim::AdaptivityMode::Surface;
+  p.params.surfaceDistanceLo = 3.5;
+  p.params.splashCount = 7;
+  p.params.gravity = {0.0, -5.0, 1.0};
+  p.params.warmStart = false;
+  p.params.seed = 123456789;
+  const std::string path = (std::filesystem::path(::testing::TempDir()) / "fp_preset.json").string();
+  savePreset(path, p);
+  const Preset q = loadPreset(path, Preset{});
+  EXPECT_EQ(q.mode, p.mode);
+  for (const sim::ParamInfo& info : sim::ParamTable::sim().entries()) {
+    if (info.kind == sim::ParamKind::Vector3)
+      EXPECT_EQ(sim::ParamTable::getVec3(q.params, info), sim::ParamTable::getVec3(p.params, info))
+          << info.key;
+    else
+      EXPECT_EQ(sim::ParamTable::getScalar(q.params, info), sim::ParamTable::getScalar(p.params, info))
+          << info.key;
+  }
+  std::ofstream(path) << R"({"parameters": {"surface_distanse_lo": 3}})";
+  EXPECT_THROW(loadPreset(path, Preset{}), sim::InputError);
+  std::ofstream(path) << R"({"parameters": {"split_max_children": 99}})";
+  EXPECT_THROW(loadPreset(path, Preset{}), sim::InputError);
+  std::ofstream(path) << R"({"mode": "adaptive"})";
+  EXPECT_THROW(loadPreset(path, Preset{}), sim::InputError);
+}
