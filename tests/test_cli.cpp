@@ -92,9 +92,10 @@ TEST(CliTest, ParsesRenderOptions) {
 }
 
 TEST(CliTest, RejectsBadRenderOptions) {
-  EXPECT_THROW(parseCommandLine({"--render"}), std::invalid_argument);        // no --out
-  EXPECT_THROW(parseCommandLine({"--out", "img"}), std::invalid_argument);    // no --render
-  EXPECT_THROW(parseCommandLine({"--width", "640"}), std::invalid_argument);  // no --render
+  EXPECT_THROW(parseCommandLine({"--render"}), std::invalid_argument);                      // no --out
+  EXPECT_THROW(parseCommandLine({"--out", "img"}), std::invalid_argument);                  // no --render
+  EXPECT_THROW(parseCommandLine({"--headless", "--width", "640"}), std::invalid_argument);  // no --render
+  EXPECT_EQ(parseCommandLine({"--width", "640"}).width, 640);  // the window's size
   EXPECT_THROW(parseCommandLine({"--render", "--out", "i", "--width", "8"}), std::invalid_argument);
   EXPECT_THROW(parseCommandLine({"--render", "--out", "i", "--height", "1e5"}), std::invalid_argument);
   EXPECT_THROW(parseCommandLine({"--render", "--out", "i", "--view", "wire"}), std::invalid_argument);
@@ -112,6 +113,61 @@ TEST(CliTest, ExitCodesOfTheExecutable) {
   const std::string bad = ::testing::TempDir() + "/fp_bad_scene.json";
   std::ofstream(bad) << "{\"domain\": 3}";
   EXPECT_EQ(runExe("--headless --quiet --scene " + bad), kExitInput);
+}
+
+TEST(CliTest, ParsesAppOptions) {
+  const CliOptions o = parseCommandLine({"--hand-script", "h.csv", "--fixed-step", "--time-scale", "0.5",
+                                         "--screenshot", "s.png", "--record-frames", "rec", "--hand-size",
+                                         "1.5", "--frames", "10", "--fullscreen", "--no-panel"});
+  EXPECT_FALSE(o.headless);
+  EXPECT_EQ(o.handScript, "h.csv");
+  EXPECT_TRUE(o.fixedStep);
+  EXPECT_DOUBLE_EQ(o.timeScale, 0.5);
+  EXPECT_EQ(o.screenshot, "s.png");
+  EXPECT_EQ(o.recordDir, "rec");
+  EXPECT_DOUBLE_EQ(o.handScale, 1.5);
+  EXPECT_EQ(o.frames.value(), 10);
+  EXPECT_TRUE(o.fullscreen);
+  EXPECT_TRUE(o.noPanel);
+  // the window's default scene is the hand tank, the headless mode's the dam break
+  EXPECT_NE(parseCommandLine({}).scenePath.find("hand_tank.json"), std::string::npos);
+  EXPECT_NE(parseCommandLine({"--headless"}).scenePath.find("dam_break.json"), std::string::npos);
+  // the hand script also works headless; window-only options do not
+  EXPECT_EQ(parseCommandLine({"--headless", "--hand-script", "h.csv"}).handScript, "h.csv");
+  EXPECT_THROW(parseCommandLine({"--headless", "--screenshot", "s.png"}), std::invalid_argument);
+  EXPECT_THROW(parseCommandLine({"--headless", "--fixed-step"}), std::invalid_argument);
+  EXPECT_THROW(parseCommandLine({"--sim-time", "1"}), std::invalid_argument);  // the window runs until closed
+  EXPECT_THROW(parseCommandLine({"--time-scale", "10"}), std::invalid_argument);
+  EXPECT_THROW(parseCommandLine({"--hand-size", "0.1"}), std::invalid_argument);
+  EXPECT_THROW(parseCommandLine({"--hand-script"}), std::invalid_argument);
+}
+
+TEST(CliTest, WindowWithoutDisplayFallsBackToHeadlessInOneLine) {
+  const std::string err = ::testing::TempDir() + "/fp_no_display.txt";
+  const std::string cmd = std::string("env -u DISPLAY -u WAYLAND_DISPLAY ") + FP_FLUIDPLAYING_EXE +
+                          " --quiet --frames 2 --scene " + scene("tiny_dam_break.json") + " > /dev/null 2> " +
+                          err;
+  const int status = std::system(cmd.c_str());
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), kExitOk);
+  std::ifstream in(err);
+  std::string line, rest;
+  std::getline(in, line);
+  EXPECT_NE(line.find("no display"), std::string::npos) << line;
+  EXPECT_NE(line.find("running headless"), std::string::npos) << line;
+  EXPECT_FALSE(std::getline(in, rest)) << "more than one line: " << rest;
+}
+
+TEST(CliTest, HeadlessHandReplayRunsAndRejectsABadScript) {
+  const std::string hands = std::string(FP_SOURCE_DIR) + "/assets/hands/";
+  EXPECT_EQ(runExe("--headless --quiet --frames 2 --scene " + scene("hand_tank.json") +
+                   " --mode uniform-low " + "--hand-script " + hands + "push.csv"),
+            kExitOk);
+  const std::string bad = ::testing::TempDir() + "/fp_bad_hand.csv";
+  std::ofstream(bad) << "time,x\n0,1\n";
+  EXPECT_EQ(runExe("--headless --quiet --frames 2 --scene " + scene("tiny_dam_break.json") +
+                   " --hand-script " + bad),
+            kExitInput);
 }
 
 TEST(HeadlessRunnerTest, WritesSummaryStatsAndFramesSmall) {
