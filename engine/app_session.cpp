@@ -84,9 +84,13 @@ void AppSession::build() {
   scene.params = m_params;
   scene.mode = m_mode;
   const input::HandModel model(m_config.handScale);
-  m_restPose = restingHandPose(m_scene, model);
-  m_hand = input::HandDriver::attach(scene, model, m_restPose);
-  m_sim = std::make_unique<sim::Simulation>(scene);
+  const input::HandPose rest = restingHandPose(m_scene, model);
+  const input::HandDriver hand = input::HandDriver::attach(scene, model, rest);
+  // built aside first: a scene that fails to build leaves the running simulation as it was
+  auto simulation = std::make_unique<sim::Simulation>(scene);
+  m_restPose = rest;
+  m_hand = hand;
+  m_sim = std::move(simulation);
   m_handPose = m_restPose;
   m_handTarget = m_restPose;
   m_segment = input::PoseTrack();
@@ -199,13 +203,19 @@ void AppSession::applyRequests() {
   SessionRequests req = std::move(m_requests);
   m_requests = SessionRequests{};
   bool rebuild = req.reset;
+  const sim::SceneDesc previousScene = m_scene;
+  const std::string previousPath = m_config.scenePath;
   if (req.scenePath) {
-    sim::SceneDesc scene = loadScene(*req.scenePath);  // throws before anything changes
-    m_scene = std::move(scene);
-    m_config.scenePath = *req.scenePath;
-    m_params = m_scene.params;
-    m_mode = m_scene.mode;
-    rebuild = true;
+    try {
+      sim::SceneDesc scene = loadScene(*req.scenePath);
+      m_scene = std::move(scene);
+      m_config.scenePath = *req.scenePath;
+      m_params = m_scene.params;
+      m_mode = m_scene.mode;
+      rebuild = true;
+    } catch (const sim::InputError& e) {
+      m_error = e.what();  // shown by the panel; the running scene goes on
+    }
   }
   if (req.mode && *req.mode != m_mode) {
     m_mode = *req.mode;
@@ -217,9 +227,17 @@ void AppSession::applyRequests() {
   }
   if (rebuild) {
     const bool failed = !m_error.empty();
-    build();
-    if (failed)
-      paused = false;  // the reset is the way out of an instability
+    try {
+      build();
+      if (failed)
+        paused = false;  // the reset is the way out of an instability
+    } catch (const sim::InputError& e) {
+      m_scene = previousScene;
+      m_config.scenePath = previousPath;
+      m_params = m_sim->params();
+      m_mode = m_sim->mode();
+      m_error = std::string("cannot build the scene: ") + e.what();
+    }
     return;
   }
   // live parameters now; the others wait for a reset

@@ -144,6 +144,11 @@ TEST(AppSessionTest, NonLiveParameterWaitsForResetAndModeChangeRebuilds) {
   session.requests().mode = sim::AdaptivityMode::UniformLow;
   session.applyRequests();
   EXPECT_EQ(session.mode(), sim::AdaptivityMode::UniformLow);
+  // a scene that cannot be loaded is reported, and the running one goes on
+  session.requests().scenePath = "/nonexistent/scene.json";
+  EXPECT_NO_THROW(session.applyRequests());
+  EXPECT_NE(session.error().find("nonexistent"), std::string::npos) << session.error();
+  EXPECT_EQ(session.mode(), sim::AdaptivityMode::UniformLow);
   // the hand's colliders follow the scene's: a palm and 15 segments, all driven
   const auto& colliders = session.simulation().colliders();
   ASSERT_EQ(colliders.size(), 17u);
