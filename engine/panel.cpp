@@ -38,8 +38,8 @@ void statistics(const AppSession& session) {
   plot("merges/s", s.mergesPerSecond, "%.0f merges per sim s");
   plot("density err", s.densityError, "%.3f %% density error");
   plot("real time", s.realTimeFactor, "x %.2f real time");
-  ImGui::Text("frame %.1f ms: %d steps, %.1f ms simulating, %.1f ms waited", s.frameMs, s.steps, s.simMs,
-              s.waitMs);
+  ImGui::TextWrapped("frame %.1f ms: %d steps, %.1f ms simulating, %.1f ms waited", s.frameMs, s.steps,
+                     s.simMs, s.waitMs);
   ImGui::Text("sim time %.3f s, uniform-high count %.0f", session.simulation().time(), s.uniformHighCount);
 }
 
@@ -268,7 +268,7 @@ void drawPanel(AppSession& session, PanelState& state, render::RenderSettings& s
   if (!state.visible)
     return;
   ImGui::SetNextWindowPos(ImVec2(8, 8), ImGuiCond_FirstUseEver);
-  ImGui::SetNextWindowSize(ImVec2(400, 0), ImGuiCond_FirstUseEver);
+  ImGui::SetNextWindowSize(ImVec2(440, 0), ImGuiCond_FirstUseEver);
   ImGui::SetNextWindowSizeConstraints(ImVec2(300, 100), ImVec2(FLT_MAX, ImGui::GetIO().DisplaySize.y - 16));
   ImGui::Begin("FluidPlaying (Tab hides, F1 help)", &state.visible);
   ImGui::PushItemWidth(-170.0f);

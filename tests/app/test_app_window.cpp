@@ -93,7 +93,7 @@ TEST(AppWindowTest, RecordedHandPushesTheWaterPanelDrawnScreenshotWritten) {
     return double(dark) / all;
   };
   EXPECT_GT(darkShare(20, 40, 200, 300), 0.4);  // the panel's dark background
-  EXPECT_LT(darkShare(430, 0, 480, 320), 0.2);  // sky, floor and water right of it
+  EXPECT_LT(darkShare(456, 0, 480, 320), 0.2);  // sky, floor and water right of it
 }
 
 TEST(AppWindowTest, ExecutableWritesScreenshotOfItsLastFrame) {
