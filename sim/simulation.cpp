@@ -35,9 +35,9 @@ double latticeKernelSum(double H, double d) {
   return sum;
 }
 
-/// Initial coarse blocks may be this much heavier than their points' optimal masses: below the split threshold,
-/// so they are only "heavy" and share mass down gradually, which starts the run near the resolution the
-/// adaptation settles at instead of with a thick band of fine particles to merge.
+/// Initial coarse blocks may be this much heavier than their points' optimal masses: below the split
+/// threshold, so they are only "heavy" and share mass down gradually, which starts the run near the
+/// resolution the adaptation settles at instead of with a thick band of fine particles to merge.
 constexpr double kInitialHeaviness = 1.9;
 
 std::string formatVec(const Vec3& v) {
@@ -175,9 +175,9 @@ void Simulation::coarsenInitialLattice(const std::vector<Eigen::Vector4i>& latti
   // Cubic blocks of e^3 lattice points become one particle at their centre of mass: on a lattice of such
   // blocks this reproduces the rest density exactly. Uniform-low merges every block of the largest edge
   // (e^3 <= mass ratio), partial blocks at the borders included. The adaptive modes merge, largest edge
-  // first, the full blocks whose every point may be that coarse (block mass at most kInitialHeaviness times each point's
-  // optimal mass), so they start graded from fine at the surface to coarse deep down, with no burst of merges
-  // at the first step.
+  // first, the full blocks whose every point may be that coarse (block mass at most kInitialHeaviness times
+  // each point's optimal mass), so they start graded from fine at the surface to coarse deep down, with no
+  // burst of merges at the first step.
   const std::size_t n = m_fluid.size();
   const int maxEdge = std::max(1, int(std::cbrt(m_params.massRatio + 1e-6)));
   std::vector<Real> target(n, baseMass());
