@@ -9,27 +9,12 @@
 
 #include "engine/scene_loader.h"
 #include "sim/simulation.h"
+#include "tests/scene_fixtures.h"
 
 using namespace fp::sim;
+using fp::test::tankScene;
 
 namespace {
-
-SceneDesc tankScene(const Vec3d& half, const Vec3d& waterLo, const Vec3d& waterHi, double radius) {
-  SceneDesc s;
-  s.name = "test tank";
-  s.params.particleRadius = radius;
-  ColliderDesc tank;
-  tank.name = "tank";
-  tank.shape = ShapeType::Box;
-  tank.container = true;
-  tank.halfExtents = half;
-  tank.position = Vec3d(0, half.y(), 0);
-  s.colliders.push_back(tank);
-  s.fluid.push_back(FluidBlock{Aabb(waterLo, waterHi), Vec3d::Zero()});
-  s.domain = Aabb(Vec3d(-half.x(), 0, -half.z()) - Vec3d::Constant(0.05),
-                  Vec3d(half.x(), 2 * half.y(), half.z()) + Vec3d::Constant(0.05));
-  return s;
-}
 
 /// mean mass, in finest masses, of the particles selected by `pick`
 template <class F>

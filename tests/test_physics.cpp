@@ -8,28 +8,12 @@
 #include "sim/boundary_sampling.h"
 #include "sim/ply_writer.h"
 #include "sim/simulation.h"
+#include "tests/scene_fixtures.h"
 
 using namespace fp::sim;
+using fp::test::tankScene;
 
 namespace {
-
-/// A box container with its floor at y = 0 and water filling [lo, hi].
-SceneDesc tankScene(const Vec3d& half, const Vec3d& waterLo, const Vec3d& waterHi, double radius) {
-  SceneDesc s;
-  s.name = "test tank";
-  s.params.particleRadius = radius;
-  ColliderDesc tank;
-  tank.name = "tank";
-  tank.shape = ShapeType::Box;
-  tank.container = true;
-  tank.halfExtents = half;
-  tank.position = Vec3d(0, half.y(), 0);
-  s.colliders.push_back(tank);
-  s.fluid.push_back(FluidBlock{Aabb(waterLo, waterHi), Vec3d::Zero()});
-  s.domain = Aabb(Vec3d(-half.x(), 0, -half.z()) - Vec3d::Constant(0.05),
-                  Vec3d(half.x(), 2 * half.y(), half.z()) + Vec3d::Constant(0.05));
-  return s;
-}
 
 SceneDesc smallDamBreak() {
   return tankScene(Vec3d(0.3, 0.2, 0.1), Vec3d(-0.3, 0.0, -0.1), Vec3d(-0.1, 0.3, 0.1), 0.008);

@@ -1,0 +1,28 @@
+#pragma once
+// Scenes built in code for the tests.
+
+#include "sim/scene.h"
+
+namespace fp::test {
+
+/// A box container with its floor at y = 0 and water filling [waterLo, waterHi]; the domain is the tank plus
+/// a margin of 5 cm.
+inline sim::SceneDesc tankScene(const sim::Vec3d& half, const sim::Vec3d& waterLo, const sim::Vec3d& waterHi,
+                                double radius) {
+  sim::SceneDesc s;
+  s.name = "test tank";
+  s.params.particleRadius = radius;
+  sim::ColliderDesc tank;
+  tank.name = "tank";
+  tank.shape = sim::ShapeType::Box;
+  tank.container = true;
+  tank.halfExtents = half;
+  tank.position = sim::Vec3d(0, half.y(), 0);
+  s.colliders.push_back(tank);
+  s.fluid.push_back(sim::FluidBlock{sim::Aabb(waterLo, waterHi), sim::Vec3d::Zero()});
+  s.domain = sim::Aabb(sim::Vec3d(-half.x(), 0, -half.z()) - sim::Vec3d::Constant(0.05),
+                       sim::Vec3d(half.x(), 2 * half.y(), half.z()) + sim::Vec3d::Constant(0.05));
+  return s;
+}
+
+}  // namespace fp::test
