@@ -37,6 +37,8 @@ ParamTable::ParamTable() {
   add("cfl_factor", "time", "-", R, 0.01, 1.0, true, "CFL number: dt = cfl * 2r / max speed", &P::cflFactor);
   add("dt_max", "time", "s", R, 1e-5, 0.05, true, "largest time step", &P::dtMax);
   add("dt_min", "time", "s", R, 1e-7, 0.01, true, "smallest time step", &P::dtMin);
+  add("initial_relaxation", "time", "steps", I, 0, 1000, false,
+      "damped steps settling the coarsened start of the modes with coarse particles", &P::initialRelaxation);
   add("density_tolerance", "solver", "%", R, 1e-4, 10.0, true,
       "allowed mean density error in percent of rho0", &P::densityTolerance);
   add("divergence_tolerance", "solver", "%", R, 1e-4, 10.0, true,

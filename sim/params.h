@@ -26,6 +26,8 @@ struct SimParams {
   double cflFactor = 0.4;  ///< CFL number: dt = cfl * 2r / v_max [-]
   double dtMax = 0.005;    ///< largest time step [s]
   double dtMin = 1e-5;     ///< smallest time step [s]
+  int initialRelaxation =
+      20;  ///< steps of damped settling before t = 0 in the modes with coarse particles [-]
   // pressure solver (DFSPH)
   double densityTolerance = 0.1;     ///< allowed mean density error [% of rho0]
   double divergenceTolerance = 0.1;  ///< allowed mean divergence error [% of rho0 per second * dt]

@@ -110,6 +110,30 @@ Simulation::Simulation(const SceneDesc& scene) : m_scene(scene), m_params(scene.
   // with supports set at once, left density errors of several percent.)
   createFluid();
   m_dt = Real(m_params.dtMax);
+  if (m_mode != AdaptivityMode::UniformHigh)
+    relax(m_params.initialRelaxation);
+}
+
+void Simulation::relax(int steps) {
+  // Damped settling (velocities zeroed after every step, colliders held at their t = 0 pose): a coarsened
+  // lattice is not at rest where fine and coarse particles meet, nor at walls, which coarse particles keep
+  // farther from. Without it the adaptive modes start with a slosh of their own. Time, counters and impulses
+  // start afresh.
+  for (int k = 0; k < steps; ++k) {
+    step();
+    m_time = 0.0;
+    for (Vec3& v : m_fluid.v)
+      v.setZero();
+  }
+  std::fill(m_fluid.splitTime.begin(), m_fluid.splitTime.end(), Real(-1));
+  for (std::uint32_t& f : m_fluid.flags)
+    f &= ~std::uint32_t(kFlagSplit);
+  m_time = 0.0;
+  m_stepCount = 0;
+  m_dt = Real(m_params.dtMax);
+  m_boundaryImpulse.setZero();
+  m_last = StepStats{};
+  m_run = RunStats{};
 }
 
 void Simulation::createFluid() {

@@ -133,6 +133,7 @@ class Simulation {
   void coarsenInitialLattice(const std::vector<Eigen::Vector4i>& lattice,
                              const std::vector<Eigen::Vector3i>& counts);
   void computeLevels(bool smooth);
+  void relax(int steps);
   AdaptivityStats adaptResolution(bool ignoreDelay);
   void updateColliders();
   void searchNeighbors();
