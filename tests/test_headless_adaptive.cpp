@@ -59,6 +59,7 @@ TEST(HeadlessAdaptiveTest, StatsReportTheAdaptivity) {
   EXPECT_EQ(u["adaptivity_share"].get<double>(), 0.0);
   // the same water in both modes, fewer particles in the adaptive one
   // (the adaptive start merges blocks and settles: the same mass up to float round-off)
-  EXPECT_NEAR(a["mass_initial"].get<double>(), u["mass_initial"].get<double>(), 1e-6 * u["mass_initial"].get<double>());
+  EXPECT_NEAR(a["mass_initial"].get<double>(), u["mass_initial"].get<double>(),
+              1e-6 * u["mass_initial"].get<double>());
   EXPECT_LT(a["particles_mean"].get<double>(), u["particles_mean"].get<double>());
 }
