@@ -9,8 +9,6 @@
 
 namespace fp::engine {
 
-namespace {
-
 double parseNumber(const std::string& flag, const std::string& text) {
   std::size_t used = 0;
   double value = 0.0;
@@ -34,7 +32,12 @@ long long parseInteger(const std::string& flag, const std::string& text, long lo
   return (long long)value;
 }
 
-}  // namespace
+double parsePositive(const std::string& flag, const std::string& text) {
+  const double value = parseNumber(flag, text);
+  if (!(value > 0.0))
+    throw std::invalid_argument(flag + " expects a positive number, got '" + text + "'");
+  return value;
+}
 
 std::string usage() {
   return "usage: fluidplaying [--scene FILE] [--mode NAME] [--hand-script FILE] [--frames N] [--screenshot "

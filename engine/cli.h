@@ -51,6 +51,13 @@ struct CliOptions {
   bool sizeGiven = false;   ///< --width or --height was given
 };
 
+/// A finite number, the whole of `text`; throws std::invalid_argument naming `flag` otherwise.
+double parseNumber(const std::string& flag, const std::string& text);
+/// An integer in [min, max], the whole of `text`; throws std::invalid_argument naming `flag` otherwise.
+long long parseInteger(const std::string& flag, const std::string& text, long long min, long long max);
+/// A finite number > 0, the whole of `text`; throws std::invalid_argument naming `flag` otherwise.
+double parsePositive(const std::string& flag, const std::string& text);
+
 /// Parses argv; throws std::invalid_argument with a one-line message for bad input.
 CliOptions parseCommandLine(const std::vector<std::string>& args);
 

@@ -77,27 +77,7 @@ RunSummary runHeadlessApp(const CliOptions& options, std::ostream& out) {
     s.status = "unstable";
     s.message = session.error();
   }
-  const sim::RunStats& run = sim.runStats();
-  s.steps = run.steps;
-  s.simSeconds = sim.time();
-  s.particlesFinal = sim.particles().size();
-  s.particlesMean = run.steps ? double(run.particleSteps) / double(run.steps) : double(s.particlesFinal);
-  s.particlesMax = std::max(run.particlesMax, s.particlesFinal);
-  s.usPerParticleStep = run.particleSteps ? s.wallSeconds * 1e6 / double(run.particleSteps) : 0.0;
-  if (run.steps) {
-    s.densityErrorMean = run.densityErrorSum / double(run.steps);
-    s.densityErrorMax = run.densityErrorMax;
-    s.densityIterationsMean = double(run.densityIterations) / double(run.steps);
-    s.divergenceIterationsMean = double(run.divergenceIterations) / double(run.steps);
-    s.neighborsMean = run.neighborsSum / double(run.steps);
-  }
-  s.massFinal = sim.totalMass();
-  s.momentumFinal = sim.totalMomentum();
-  s.memoryBytes = sim.memoryBytes();
-  s.phases = run.times;
-  s.adaptivity = run.adaptivity;
-  const double stepTime = run.times.total();
-  s.adaptivityShare = stepTime > 0 ? (run.times.levels + run.times.adaptation) / stepTime : 0.0;
+  fillRunFigures(sim, s);
   return s;
 }
 

@@ -28,6 +28,30 @@ void exportFrame(const std::string& dir, int frame, const sim::ParticleSet& part
 }
 }  // namespace
 
+void fillRunFigures(const sim::Simulation& simulation, RunSummary& s) {
+  const sim::RunStats& run = simulation.runStats();
+  s.steps = run.steps;
+  s.simSeconds = simulation.time();
+  s.particlesFinal = simulation.particles().size();
+  s.particlesMean = run.steps ? double(run.particleSteps) / double(run.steps) : double(s.particlesFinal);
+  s.particlesMax = std::max(run.particlesMax, s.particlesFinal);
+  s.usPerParticleStep = run.particleSteps ? s.wallSeconds * 1e6 / double(run.particleSteps) : 0.0;
+  if (run.steps) {
+    s.densityErrorMean = run.densityErrorSum / double(run.steps);
+    s.densityErrorMax = run.densityErrorMax;
+    s.densityIterationsMean = double(run.densityIterations) / double(run.steps);
+    s.divergenceIterationsMean = double(run.divergenceIterations) / double(run.steps);
+    s.neighborsMean = run.neighborsSum / double(run.steps);
+  }
+  s.massFinal = simulation.totalMass();
+  s.momentumFinal = simulation.totalMomentum();
+  s.memoryBytes = simulation.memoryBytes();
+  s.phases = run.times;
+  s.adaptivity = run.adaptivity;
+  const double stepTime = run.times.total();
+  s.adaptivityShare = stepTime > 0 ? (run.times.levels + run.times.adaptation) / stepTime : 0.0;
+}
+
 RunSummary runHeadless(const CliOptions& options, std::ostream& out, std::ostream& progress,
                        const FrameCallback& onFrame) {
   sim::SceneDesc scene = loadScene(options.scenePath);
@@ -122,28 +146,8 @@ RunSummary runHeadless(const CliOptions& options, std::ostream& out, std::ostrea
   s.splashParticles /= double(frame + 1);
   s.splashHeight /= double(frame + 1);
   s.splashHeightWithSplash /= double(frame + 1);
-  const sim::RunStats& run = simulation.runStats();
   s.frames = frame;
-  s.steps = run.steps;
-  s.simSeconds = simulation.time();
-  s.particlesFinal = simulation.particles().size();
-  s.particlesMean = run.steps ? double(run.particleSteps) / double(run.steps) : double(s.particlesFinal);
-  s.particlesMax = std::max(run.particlesMax, s.particlesFinal);
-  s.usPerParticleStep = run.particleSteps ? s.wallSeconds * 1e6 / double(run.particleSteps) : 0.0;
-  if (run.steps) {
-    s.densityErrorMean = run.densityErrorSum / double(run.steps);
-    s.densityErrorMax = run.densityErrorMax;
-    s.densityIterationsMean = double(run.densityIterations) / double(run.steps);
-    s.divergenceIterationsMean = double(run.divergenceIterations) / double(run.steps);
-    s.neighborsMean = run.neighborsSum / double(run.steps);
-  }
-  s.massFinal = simulation.totalMass();
-  s.momentumFinal = simulation.totalMomentum();
-  s.memoryBytes = simulation.memoryBytes();
-  s.phases = run.times;
-  s.adaptivity = run.adaptivity;
-  const double stepTime = run.times.total();
-  s.adaptivityShare = stepTime > 0 ? (run.times.levels + run.times.adaptation) / stepTime : 0.0;
+  fillRunFigures(simulation, s);
   return s;
 }
 

@@ -56,6 +56,10 @@ using FrameCallback = std::function<void(int frame, const sim::Simulation& simul
 RunSummary runHeadless(const CliOptions& options, std::ostream& out, std::ostream& progress,
                        const FrameCallback& onFrame = {});
 
+/// Fills the figures of a finished run from the simulation's run statistics (steps, particles, density error,
+/// iterations, mass, momentum, memory, phases, adaptivity); `s.wallSeconds` must be set first.
+void fillRunFigures(const sim::Simulation& simulation, RunSummary& s);
+
 /// Writes a summary as JSON; throws sim::InputError when the file cannot be written.
 void writeStatsJson(const std::string& path, const RunSummary& summary);
 

@@ -102,7 +102,7 @@ double Adaptivity::splitError(const AdaptContext& ctx, std::size_t o, const std:
       rho += double(p.m[j] / rho0) * CubicSpline::w((xs - p.x[j]).norm(), pairSupport(Hs, p.H[j]));
     }
     const Real Hsb = pairSupport(Hs, Hb);
-    const double sb = double(Hsb / Hb);
+    const double sb = double(ctx.boundary.volumeScale(Hs));
     for (std::uint32_t k = ctx.boundaryNbrs.offsets[o]; k < ctx.boundaryNbrs.offsets[o + 1]; ++k) {
       const std::uint32_t b = ctx.boundaryNbrs.indices[k];
       rho += sb * double(ctx.boundary.psi[b]) * CubicSpline::w((xs - ctx.boundary.x[b]).norm(), Hsb);

@@ -44,6 +44,8 @@ class BoundarySet {
   std::size_t staticCount() const { return m_staticCount; }
   /// support radius of every boundary particle [m]
   Real support() const { return m_support; }
+  /// factor on psi for a fluid particle of support Hi: the pair support over the boundary's own, H_ib / H_b
+  Real volumeScale(Real Hi) const { return Real(0.5) * (Hi + m_support) / m_support; }
   /// moves the kinematic particles to their colliders' current poses and sets their velocities
   void updateKinematic(const std::vector<ColliderState>& colliders);
   /// reorders the particles from index `begin` on: new begin + k holds old begin + order[k]

@@ -88,8 +88,7 @@ double DfsphSolver::computeDensityAndFactor(SolverContext& ctx) {
                               sqSum += (Vi / Vj) * gv.squaredNorm();
                             }
                             const Real hb = pairSupport(Hi, Hb);
-                            const Real sb =
-                                hb / Hb;  // boundary volume scaled to the pair support (see BoundarySet)
+                            const Real sb = ctx.boundary.volumeScale(Hi);
                             for (std::uint32_t k = bo[i]; k < bo[i + 1]; ++k) {
                               const std::uint32_t b = bi[k];
                               const Vec3 xib = xi - xb[b];
@@ -136,7 +135,7 @@ void DfsphSolver::computeDensityRate(const SolverContext& ctx) {
         rate += m[j] * invRho0 * g * (vi - v[j]).dot(xij);
       }
       const Real hb = pairSupport(Hi, Hb);
-      const Real sb = hb / Hb;  // boundary volume scaled to the pair support (see BoundarySet)
+      const Real sb = ctx.boundary.volumeScale(Hi);
       for (std::uint32_t k = bo[i]; k < bo[i + 1]; ++k) {
         const std::uint32_t b = bi[k];
         const Vec3 xib = xi - xb[b];
@@ -183,7 +182,7 @@ Vec3d DfsphSolver::applyStiffness(SolverContext& ctx, Real dt, std::vector<Real>
     if (ki != Real(0)) {
       // Akinci 2012: the boundary mirrors the particle's own pressure
       const Real hb = pairSupport(Hi, Hb);
-      const Real sb = hb / Hb;  // boundary volume scaled to the pair support (see BoundarySet)
+      const Real sb = ctx.boundary.volumeScale(Hi);
       for (std::uint32_t q = bo[i]; q < bo[i + 1]; ++q) {
         const std::uint32_t b = bi[q];
         const Vec3 xib = xi - xb[b];
@@ -355,7 +354,7 @@ void DfsphSolver::nonPressureForces(SolverContext& ctx, Real dtPrevious) {
     Vec3 ab = Vec3::Zero();
     if (cBVisc > 0) {
       const Real hb = pairSupport(Hi, Hb);
-      const Real sb = hb / Hb;  // boundary volume scaled to the pair support (see BoundarySet)
+      const Real sb = ctx.boundary.volumeScale(Hi);
       for (std::uint32_t q = bo[i]; q < bo[i + 1]; ++q) {
         const std::uint32_t b = bi[q];
         ab += (cBVisc * rho0 * sb * psi[b] / rho[i] * CubicSpline::w((xi - xb[b]).norm(), hb)) * (vb[b] - vi);

@@ -48,7 +48,6 @@ Real supportForMass(Real m, Real mFine, Real fineRadius) {
 void detectSurface(ParticleSet& p, const NeighborList& fluidNbrs, const NeighborList& boundaryNbrs,
                    const BoundarySet& boundary) {
   const std::size_t n = p.size();
-  const Real Hb = boundary.support();
   tbb::parallel_for(Range(0, n, kGrain), [&](const Range& r) {
     for (std::size_t i = r.begin(); i < r.end(); ++i) {
       const Vec3 xi = p.x[i];
@@ -67,7 +66,7 @@ void detectSurface(ParticleSet& p, const NeighborList& fluidNbrs, const Neighbor
         if (len > Real(0))
           away += (vj / len) * d;
       }
-      const Real sb = pairSupport(p.H[i], Hb) / Hb;
+      const Real sb = boundary.volumeScale(p.H[i]);
       for (std::uint32_t k = boundaryNbrs.offsets[i]; k < boundaryNbrs.offsets[i + 1]; ++k) {
         const std::uint32_t b = boundaryNbrs.indices[k];
         const Vec3 d = xi - boundary.x[b];

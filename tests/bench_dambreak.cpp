@@ -33,6 +33,7 @@ using fp::engine::kExitInput;
 using fp::engine::kExitOk;
 using fp::engine::kExitUnstable;
 using fp::engine::kExitUsage;
+using fp::engine::parsePositive;
 
 const char* const kDefaultScene = FP_SOURCE_DIR "/assets/scenes/dam_break_hires.json";
 const char* const kQuickScene = FP_SOURCE_DIR "/assets/scenes/dam_break.json";
@@ -76,19 +77,6 @@ struct Options {
   std::vector<int> threads{1, 2};
   std::string csvPath;
 };
-
-double parsePositive(const std::string& flag, const std::string& text) {
-  std::size_t used = 0;
-  double value = 0.0;
-  try {
-    value = std::stod(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (text.empty() || used != text.size() || !(value > 0.0) || !std::isfinite(value))
-    throw std::invalid_argument(flag + " expects a positive number, got '" + text + "'");
-  return value;
-}
 
 std::vector<int> parseThreadList(const std::string& text) {
   std::vector<int> list;

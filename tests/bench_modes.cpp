@@ -158,19 +158,6 @@ std::string usage() {
          "0.5)\n";
 }
 
-double parsePositive(const std::string& flag, const std::string& text) {
-  std::size_t used = 0;
-  double v = 0;
-  try {
-    v = std::stod(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used != text.size() || !(v > 0))
-    throw std::invalid_argument(flag + " expects a positive number, got '" + text + "'");
-  return v;
-}
-
 /// Runs one mode. The wall time counts the simulation only: frame sampling, splash and rendering are timed
 /// out.
 /// The resting level of a mode: the same scene with every collider held still, run for `restTime`, then the
@@ -291,11 +278,11 @@ int main(int argc, char** argv) {
       } else if (a == "--scene") {
         scenePath = value();
       } else if (a == "--sim-time") {
-        simTime = parsePositive(a, value());
+        simTime = engine::parsePositive(a, value());
       } else if (a == "--quick") {
         simTime = kQuickSimTime;
       } else if (a == "--threads") {
-        threads = int(parsePositive(a, value()));
+        threads = int(engine::parseInteger(a, value(), 1, 1024));
       } else if (a == "--csv") {
         csvPath = value();
       } else if (a == "--out") {
@@ -303,15 +290,16 @@ int main(int argc, char** argv) {
       } else if (a == "--images") {
         images = true;
       } else if (a == "--rest-time") {
-        restTime = parsePositive(a, value());
+        restTime = engine::parsePositive(a, value());
       } else if (a == "--image-time") {
-        imageTime = parsePositive(a, value());
+        imageTime = engine::parsePositive(a, value());
       } else if (a == "--set") {
         const std::string kv = value();
         const std::size_t eq = kv.find('=');
         if (eq == std::string::npos)
           throw std::invalid_argument("--set expects KEY=VALUE, got '" + kv + "'");
-        overrides.emplace_back(kv.substr(0, eq), std::stod(kv.substr(eq + 1)));
+        overrides.emplace_back(kv.substr(0, eq),
+                               engine::parseNumber("--set " + kv.substr(0, eq), kv.substr(eq + 1)));
       } else if (a == "--modes") {
         modes.clear();
         std::stringstream list(value());
