@@ -15,6 +15,9 @@ readonly PACKAGES=(
   libpng-dev libstb-dev
   googletest libgtest-dev libgmock-dev
   xvfb xauth clang-format
+  libcli11-dev ffmpeg
+  openxr-layer-corevalidation libopenxr-utils
+  clang libfuzzer-14-dev libclang-rt-14-dev
 )
 readonly FORMAT_DIRS=(sim engine render input tests)
 
