@@ -35,7 +35,7 @@ struct SimParams {
   int maxIterations = 100;           ///< most solver iterations per solve
   bool divergenceSolve = true;       ///< run the divergence-free solve
   bool warmStart = true;             ///< warm-start both solves with the previous step's stiffness
-  // adaptivity (METHOD.md sections 4 and 5); used by the surface and fluidplaying modes
+  // adaptivity (docs/method.md, Levels and Adaptivity); used by the surface and fluidplaying modes
   double massRatio = 27.0;          ///< m_base / m_fine: mass of the coarsest particles over the finest [-]
   double surfaceDistanceLo = 2.0;   ///< phi below this is fully fine (R_phi = 0) [fine radii r]
   double surfaceDistanceHi = 12.0;  ///< phi above this is fully coarse (R_phi = 1) [fine radii r]
@@ -57,7 +57,7 @@ struct SimParams {
   double splitAbove = 1.99;       ///< m / m_opt at or above this: too heavy, split [-]
   double transferRate = 0.05;     ///< most mass a receiver gains per adaptation step, share of its own [-]
   int supportBlendSteps = 10;  ///< steps over which a changed support radius is blended in (0: at once) [-]
-  // splash enhancement (METHOD.md section 6): a render-only post-process, never fed back into the simulation
+  // splash enhancement (docs/method.md, Splash): render-only post-process, never fed back into the simulation
   bool splashEnabled = true;    ///< generate splash particles
   int splashNeighbors = 12;     ///< N_splash: surface particles with fewer fluid neighbours spawn splash [-]
   int splashCount = 4;          ///< n_splash: temporary particles per spawning particle [-]
