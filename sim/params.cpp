@@ -42,7 +42,7 @@ ParamTable::ParamTable() : ParamTableOf<SimParams>("parameter", &ParamTable::val
       true);
   add("warm_start", "solver", "-", 0, 1, live, "warm-start both solves with the previous step's stiffness",
       &P::warmStart, true);
-  // adaptivity (METHOD.md sections 4 and 5)
+  // adaptivity (docs/method.md, Levels and Adaptivity)
   add("mass_ratio", "adaptivity", "-", 1.0, 125.0, live,
       "m_base / m_fine: mass of the coarsest particles over the finest", &P::massRatio, 27.0);
   add("surface_distance_lo", "adaptivity", "r", 0.0, 1000.0, live,
@@ -86,7 +86,7 @@ ParamTable::ParamTable() : ParamTableOf<SimParams>("parameter", &ParamTable::val
       0.05);
   add("support_blend_steps", "adaptivity", "steps", 0, 100, live,
       "steps over which a changed support radius is blended in (0: at once)", &P::supportBlendSteps, 10);
-  // splash enhancement (METHOD.md section 6)
+  // splash enhancement (docs/method.md, Splash)
   add("splash_enabled", "splash", "-", 0, 1, live, "generate splash particles (render only)",
       &P::splashEnabled, true);
   add("splash_neighbors", "splash", "-", 1, 200, live,

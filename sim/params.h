@@ -40,7 +40,7 @@ struct SimParams {
   int maxIterations;
   bool divergenceSolve;
   bool warmStart;
-  // adaptivity (METHOD.md sections 4 and 5); used by the surface and fluidplaying modes
+  // adaptivity (docs/method.md, Levels and Adaptivity); used by the surface and fluidplaying modes
   double massRatio;
   double surfaceDistanceLo;
   double surfaceDistanceHi;
@@ -61,7 +61,7 @@ struct SimParams {
   double splitAbove;
   double transferRate;
   int supportBlendSteps;
-  // splash enhancement (METHOD.md section 6): a render-only post-process, never fed back into the simulation
+  // splash enhancement (docs/method.md, Splash): render-only post-process, never fed back into the simulation
   bool splashEnabled;
   int splashNeighbors;
   int splashCount;
