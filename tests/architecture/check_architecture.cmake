@@ -4,8 +4,8 @@
 #   input/ and render/ include nothing of engine/; render/ nothing of input/; input/ nothing of render/.
 # Links (the transitive closure of the CMake link graph, since readelf's NEEDED entries hide what the linker
 #   dropped): fluid_sim reaches Eigen, TBB and threads only; fluid_input and fluid_render never reach the
-#   engine, nor each other; the scene loader no renderer; the simulation's test suites link the simulation
-#   (and, for the physics suite, the scene loader) alone.
+#   engine, nor each other; the scene loader no renderer; fluid_engine no window (GLFW, ImGui); the
+#   simulation's test suites link the simulation (and, for the physics suite, the scene loader) alone.
 # Built executables: the simulation's test suites need no GL, OSMesa, GLEW, GLFW or PNG library (readelf -d).
 cmake_minimum_required(VERSION 3.22)
 
@@ -127,6 +127,8 @@ check_links_not(fluid_render "^(fluid_engine|fluid_desktop|fluid_input)$"
                 "render/ reads the simulation only, never the engine or input/")
 check_links_only(fluid_scene "${sim_deps}|^(fluid_scene|nlohmann_json::nlohmann_json)$"
                  "the scene loader turns JSON into a sim::SceneDesc and needs nothing else")
+check_links_not(fluid_engine "^(fluid_desktop|glfw|PkgConfig::IMGUI|fp_imgui_opengl3)$"
+                "fluid_engine has no window code: the headless mode and the tests link no GLFW or ImGui")
 check_links_only(test_sim_unit "${sim_deps}|${gtest}" "the simulation's unit tests link fluid_sim alone")
 check_links_only(test_physics "${sim_deps}|${gtest}|^(fluid_scene|nlohmann_json::nlohmann_json)$"
                  "the physics tests link fluid_sim and the scene loader alone")
