@@ -113,8 +113,8 @@ bool calledFromGlew(const void* caller) {
 
 // GLEW looks functions up through glXGetProcAddressARB. Defining it here, in the executable, interposes on
 // libGL's for the whole process, so only GLEW's own lookups are answered by the loaded context's provider
-// (OSMesa, EGL): every other caller (an OpenXR runtime creating swapchain textures in the app's GLX context, a
-// driver, a library) gets libGL's real GLX lookup, as it would without this definition. GLX's own functions
+// (OSMesa, EGL): every other caller (an OpenXR runtime creating swapchain textures in the app's GLX context,
+// a driver, a library) gets libGL's real GLX lookup, as it would without this definition. GLX's own functions
 // always come from libGL.
 extern "C" __attribute__((visibility("default"))) fp::render::gl::Proc glXGetProcAddressARB(
     const GLubyte* name) {

@@ -30,7 +30,8 @@ std::string testDir(const char* name) {
 class XrRuntime : public ::testing::Test {
  protected:
   void SetUp() override {
-    m_validation = test::useTestRuntime(testDir(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+    m_validation =
+        test::useTestRuntime(testDir(::testing::UnitTest::GetInstance()->current_test_info()->name()));
     m_stats = testDir(::testing::UnitTest::GetInstance()->current_test_info()->name()) + "/stats.txt";
     std::filesystem::remove(m_stats);
     setenv("FP_XR_STATS", m_stats.c_str(), 1);
@@ -86,8 +87,8 @@ class XrRuntime : public ::testing::Test {
     if (!m_gl.create(error))
       GTEST_SKIP() << error;
     XrGraphicsRequirementsOpenGLKHR req{XR_TYPE_GRAPHICS_REQUIREMENTS_OPENGL_KHR};
-    XR_OK(proc<PFN_xrGetOpenGLGraphicsRequirementsKHR>("xrGetOpenGLGraphicsRequirementsKHR")(m_instance, m_system,
-                                                                                             &req));
+    XR_OK(proc<PFN_xrGetOpenGLGraphicsRequirementsKHR>("xrGetOpenGLGraphicsRequirementsKHR")(m_instance,
+                                                                                             m_system, &req));
     XrGraphicsBindingOpenGLXlibKHR binding{XR_TYPE_GRAPHICS_BINDING_OPENGL_XLIB_KHR};
     binding.xDisplay = m_gl.display;
     binding.glxFBConfig = m_gl.config;
@@ -244,7 +245,8 @@ TEST_F(XrRuntime, SessionFramesAndExit) {
       XR_OK(xrWaitSwapchainImage(color[eye], &wait));
       XR_OK(xrWaitSwapchainImage(depth[eye], &wait));
       glBindFramebuffer(GL_FRAMEBUFFER, fbo);
-      glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, images[eye][index].image, 0);
+      glFramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, images[eye][index].image,
+                             0);
       EXPECT_EQ(glCheckFramebufferStatus(GL_FRAMEBUFFER), GLenum(GL_FRAMEBUFFER_COMPLETE));
       glClearColor(0.2f * float(eye), 0.5f, 0.8f, 1.0f);
       glClear(GL_COLOR_BUFFER_BIT);
@@ -342,10 +344,12 @@ TEST_F(XrRuntime, HandJointsAndControllerActions) {
   const XrAction grip = action("grip", XR_ACTION_TYPE_POSE_INPUT);
   const XrAction trigger = action("trigger", XR_ACTION_TYPE_FLOAT_INPUT);
   const XrAction squeeze = action("squeeze", XR_ACTION_TYPE_FLOAT_INPUT);
-  std::vector<XrActionSuggestedBinding> bindings = {
-      {grip, path("/user/hand/left/input/grip/pose")},      {grip, path("/user/hand/right/input/grip/pose")},
-      {trigger, path("/user/hand/left/input/trigger/value")}, {trigger, path("/user/hand/right/input/trigger/value")},
-      {squeeze, path("/user/hand/left/input/squeeze/value")}, {squeeze, path("/user/hand/right/input/squeeze/value")}};
+  std::vector<XrActionSuggestedBinding> bindings = {{grip, path("/user/hand/left/input/grip/pose")},
+                                                    {grip, path("/user/hand/right/input/grip/pose")},
+                                                    {trigger, path("/user/hand/left/input/trigger/value")},
+                                                    {trigger, path("/user/hand/right/input/trigger/value")},
+                                                    {squeeze, path("/user/hand/left/input/squeeze/value")},
+                                                    {squeeze, path("/user/hand/right/input/squeeze/value")}};
   XrInteractionProfileSuggestedBinding suggested{XR_TYPE_INTERACTION_PROFILE_SUGGESTED_BINDING};
   suggested.interactionProfile = path("/interaction_profiles/valve/index_controller");
   suggested.countSuggestedBindings = uint32_t(bindings.size());
@@ -553,10 +557,10 @@ render::gl::Proc countingLoader(const char* name) {
 }
 
 TEST_F(XrRuntime, RuntimeGlLookupsSurviveTheRenderersReplacement) {
-  // render/gl_api replaces glXGetProcAddressARB for the whole process so GLEW asks the app's GL provider (OSMesa,
-  // EGL, GLFW). A runtime in the same process resolves its own GL functions with glXGetProcAddressARB (from its
-  // own threads and contexts, where the app's provider cannot answer): those lookups must reach libGL, never the
-  // app's provider.
+  // render/gl_api replaces glXGetProcAddressARB for the whole process so GLEW asks the app's GL provider
+  // (OSMesa, EGL, GLFW). A runtime in the same process resolves its own GL functions with
+  // glXGetProcAddressARB (from its own threads and contexts, where the app's provider cannot answer): those
+  // lookups must reach libGL, never the app's provider.
   m_gl.loadGl = false;
   createInstance();
   createSession();

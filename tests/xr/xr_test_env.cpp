@@ -11,10 +11,10 @@ namespace fp::test {
 
 std::string useTestRuntime(const std::string& dir) {
   std::filesystem::create_directories(dir);
-  for (const char* name : {"FP_XR_NO_GL", "FP_XR_NO_HANDS", "FP_XR_NO_HMD", "FP_XR_NO_STAGE", "FP_XR_VIRTUAL_TIME",
-                           "FP_XR_PERIOD_NS", "FP_XR_SIZE", "FP_XR_FORMATS", "FP_XR_HEAD", "FP_XR_IPD",
-                           "FP_XR_HANDS_OFFSET", "FP_XR_CONTROLLERS", "FP_XR_HANDS", "FP_XR_EVENTS", "FP_XR_STATS",
-                           "FP_XR_CAPTURE", "FP_XR_PROFILE"})
+  for (const char* name :
+       {"FP_XR_NO_GL", "FP_XR_NO_HANDS", "FP_XR_NO_HMD", "FP_XR_NO_STAGE", "FP_XR_VIRTUAL_TIME",
+        "FP_XR_PERIOD_NS", "FP_XR_SIZE", "FP_XR_FORMATS", "FP_XR_HEAD", "FP_XR_IPD", "FP_XR_HANDS_OFFSET",
+        "FP_XR_CONTROLLERS", "FP_XR_HANDS", "FP_XR_EVENTS", "FP_XR_STATS", "FP_XR_CAPTURE", "FP_XR_PROFILE"})
     unsetenv(name);
   setenv("XR_RUNTIME_JSON", FP_TEST_RUNTIME_JSON, 1);
   setenv("XR_ENABLE_API_LAYERS", "XR_APILAYER_LUNARG_core_validation", 1);
@@ -49,11 +49,18 @@ bool GlxContext::create(std::string& error) {
     error = "no X display";
     return false;
   }
-  const int attributes[] = {GLX_DRAWABLE_TYPE, GLX_PBUFFER_BIT | GLX_WINDOW_BIT, GLX_RENDER_TYPE, GLX_RGBA_BIT,
-                            GLX_RED_SIZE,      8,
-                            GLX_GREEN_SIZE,    8,
-                            GLX_BLUE_SIZE,     8,
-                            GLX_DEPTH_SIZE,    24,
+  const int attributes[] = {GLX_DRAWABLE_TYPE,
+                            GLX_PBUFFER_BIT | GLX_WINDOW_BIT,
+                            GLX_RENDER_TYPE,
+                            GLX_RGBA_BIT,
+                            GLX_RED_SIZE,
+                            8,
+                            GLX_GREEN_SIZE,
+                            8,
+                            GLX_BLUE_SIZE,
+                            8,
+                            GLX_DEPTH_SIZE,
+                            24,
                             None};
   int count = 0;
   GLXFBConfig* configs = glXChooseFBConfig(display, DefaultScreen(display), attributes, &count);
@@ -66,8 +73,9 @@ bool GlxContext::create(std::string& error) {
   using CreateContext = GLXContext (*)(Display*, GLXFBConfig, GLXContext, Bool, const int*);
   const auto createContext =
       reinterpret_cast<CreateContext>(render::gl::glxProcAddress("glXCreateContextAttribsARB"));
-  const int contextAttributes[] = {GLX_CONTEXT_MAJOR_VERSION_ARB, 3, GLX_CONTEXT_MINOR_VERSION_ARB, 3,
-                                   GLX_CONTEXT_PROFILE_MASK_ARB, GLX_CONTEXT_CORE_PROFILE_BIT_ARB, None};
+  const int contextAttributes[] = {
+      GLX_CONTEXT_MAJOR_VERSION_ARB,    3,   GLX_CONTEXT_MINOR_VERSION_ARB, 3, GLX_CONTEXT_PROFILE_MASK_ARB,
+      GLX_CONTEXT_CORE_PROFILE_BIT_ARB, None};
   context = createContext ? createContext(display, config, nullptr, True, contextAttributes) : nullptr;
   const int pbufferAttributes[] = {GLX_PBUFFER_WIDTH, 16, GLX_PBUFFER_HEIGHT, 16, None};
   pbuffer = glXCreatePbuffer(display, config, pbufferAttributes);

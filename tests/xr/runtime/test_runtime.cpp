@@ -93,7 +93,8 @@ struct Config {
   bool virtualTime = envOn("FP_XR_VIRTUAL_TIME");
   std::int64_t period = std::int64_t(envNumbers("FP_XR_PERIOD_NS", "11111111")[0]);
   std::vector<double> size = envNumbers("FP_XR_SIZE", "128,128");
-  std::vector<double> formats = envNumbers("FP_XR_FORMATS", "35907,32856,33190,36012");  // sRGB8_A8, RGBA8, D24, D32F
+  std::vector<double> formats =
+      envNumbers("FP_XR_FORMATS", "35907,32856,33190,36012");        // sRGB8_A8, RGBA8, D24, D32F
   std::vector<double> head = envNumbers("FP_XR_HEAD", "0,1.6,0,0");  // stage x, y, z [m], yaw [deg]
   double ipd = envNumbers("FP_XR_IPD", "0.064")[0];
   std::vector<double> handOffset = envNumbers("FP_XR_HANDS_OFFSET", "0,0,0");
@@ -101,7 +102,8 @@ struct Config {
   std::string hands = env("FP_XR_HANDS");
   std::string events = env("FP_XR_EVENTS");
   std::string stats = env("FP_XR_STATS");
-  std::string capture = env("FP_XR_CAPTURE");  // "FRAME,DIR": the eyes of frame FRAME as DIR/eye0.ppm, eye1.ppm
+  std::string capture =
+      env("FP_XR_CAPTURE");  // "FRAME,DIR": the eyes of frame FRAME as DIR/eye0.ppm, eye1.ppm
   std::string profile = env("FP_XR_PROFILE", "/interaction_profiles/khr/simple_controller");
 };
 
@@ -439,8 +441,9 @@ Pose fromXr(const XrPosef& x) {
               Vec{x.position.x, x.position.y, x.position.z}};
 }
 bool poseValid(const XrPosef& x) {
-  const double n = std::sqrt(double(x.orientation.x) * x.orientation.x + double(x.orientation.y) * x.orientation.y +
-                             double(x.orientation.z) * x.orientation.z + double(x.orientation.w) * x.orientation.w);
+  const double n =
+      std::sqrt(double(x.orientation.x) * x.orientation.x + double(x.orientation.y) * x.orientation.y +
+                double(x.orientation.z) * x.orientation.z + double(x.orientation.w) * x.orientation.w);
   return std::abs(n - 1.0) < 1e-3;
 }
 
@@ -524,20 +527,23 @@ std::vector<ExtensionInfo> offeredExtensions() {
     out.push_back({XR_KHR_OPENGL_ENABLE_EXTENSION_NAME, XR_KHR_opengl_enable_SPEC_VERSION, true});
   if (g_config->handTracking)
     out.push_back({XR_EXT_HAND_TRACKING_EXTENSION_NAME, XR_EXT_hand_tracking_SPEC_VERSION, true});
-  out.push_back({XR_KHR_COMPOSITION_LAYER_DEPTH_EXTENSION_NAME, XR_KHR_composition_layer_depth_SPEC_VERSION, true});
+  out.push_back(
+      {XR_KHR_COMPOSITION_LAYER_DEPTH_EXTENSION_NAME, XR_KHR_composition_layer_depth_SPEC_VERSION, true});
   return out;
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL EnumerateInstanceExtensionProperties(const char* layerName, uint32_t capacity,
-                                                                    uint32_t* count, XrExtensionProperties* props) {
+                                                                    uint32_t* count,
+                                                                    XrExtensionProperties* props) {
   LOCK;
   if (layerName && *layerName)
     return XR_ERROR_API_LAYER_NOT_PRESENT;
   const auto ext = offeredExtensions();
-  return enumerate(capacity, count, props, std::uint32_t(ext.size()), [&](XrExtensionProperties& p, std::uint32_t i) {
-    std::snprintf(p.extensionName, sizeof(p.extensionName), "%s", ext[i].name);
-    p.extensionVersion = ext[i].version;
-  });
+  return enumerate(capacity, count, props, std::uint32_t(ext.size()),
+                   [&](XrExtensionProperties& p, std::uint32_t i) {
+                     std::snprintf(p.extensionName, sizeof(p.extensionName), "%s", ext[i].name);
+                     p.extensionVersion = ext[i].version;
+                   });
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL CreateInstance(const XrInstanceCreateInfo* info, XrInstance* instance) {
@@ -623,7 +629,8 @@ XRAPI_ATTR XrResult XRAPI_CALL PollEvent(XrInstance instance, XrEventDataBuffer*
   return XR_SUCCESS;
 }
 
-XRAPI_ATTR XrResult XRAPI_CALL ResultToString(XrInstance instance, XrResult value, char buffer[XR_MAX_RESULT_STRING_SIZE]) {
+XRAPI_ATTR XrResult XRAPI_CALL ResultToString(XrInstance instance, XrResult value,
+                                              char buffer[XR_MAX_RESULT_STRING_SIZE]) {
   LOCK;
   if (!lookup<Instance>(handleOf(instance), Kind::Instance))
     return XR_ERROR_HANDLE_INVALID;
@@ -642,11 +649,13 @@ XRAPI_ATTR XrResult XRAPI_CALL StructureTypeToString(XrInstance instance, XrStru
 
 constexpr XrSystemId kSystem = 1;
 
-XRAPI_ATTR XrResult XRAPI_CALL GetSystem(XrInstance instance, const XrSystemGetInfo* info, XrSystemId* systemId) {
+XRAPI_ATTR XrResult XRAPI_CALL GetSystem(XrInstance instance, const XrSystemGetInfo* info,
+                                         XrSystemId* systemId) {
   LOCK;
   if (!lookup<Instance>(handleOf(instance), Kind::Instance))
     return XR_ERROR_HANDLE_INVALID;
-  if (info->formFactor != XR_FORM_FACTOR_HEAD_MOUNTED_DISPLAY && info->formFactor != XR_FORM_FACTOR_HANDHELD_DISPLAY)
+  if (info->formFactor != XR_FORM_FACTOR_HEAD_MOUNTED_DISPLAY &&
+      info->formFactor != XR_FORM_FACTOR_HANDHELD_DISPLAY)
     return XR_ERROR_FORM_FACTOR_UNSUPPORTED;
   if (info->formFactor != XR_FORM_FACTOR_HEAD_MOUNTED_DISPLAY || !g_config->hmd)
     return XR_ERROR_FORM_FACTOR_UNAVAILABLE;
@@ -654,7 +663,8 @@ XRAPI_ATTR XrResult XRAPI_CALL GetSystem(XrInstance instance, const XrSystemGetI
   return XR_SUCCESS;
 }
 
-XRAPI_ATTR XrResult XRAPI_CALL GetSystemProperties(XrInstance instance, XrSystemId systemId, XrSystemProperties* props) {
+XRAPI_ATTR XrResult XRAPI_CALL GetSystemProperties(XrInstance instance, XrSystemId systemId,
+                                                   XrSystemProperties* props) {
   LOCK;
   Instance* inst = lookup<Instance>(handleOf(instance), Kind::Instance);
   if (!inst)
@@ -676,7 +686,8 @@ XRAPI_ATTR XrResult XRAPI_CALL GetSystemProperties(XrInstance instance, XrSystem
 
 XRAPI_ATTR XrResult XRAPI_CALL EnumerateEnvironmentBlendModes(XrInstance instance, XrSystemId systemId,
                                                               XrViewConfigurationType type, uint32_t capacity,
-                                                              uint32_t* count, XrEnvironmentBlendMode* modes) {
+                                                              uint32_t* count,
+                                                              XrEnvironmentBlendMode* modes) {
   LOCK;
   if (!lookup<Instance>(handleOf(instance), Kind::Instance))
     return XR_ERROR_HANDLE_INVALID;
@@ -688,15 +699,17 @@ XRAPI_ATTR XrResult XRAPI_CALL EnumerateEnvironmentBlendModes(XrInstance instanc
                    [](XrEnvironmentBlendMode& m, std::uint32_t) { m = XR_ENVIRONMENT_BLEND_MODE_OPAQUE; });
 }
 
-XRAPI_ATTR XrResult XRAPI_CALL EnumerateViewConfigurations(XrInstance instance, XrSystemId systemId, uint32_t capacity,
-                                                           uint32_t* count, XrViewConfigurationType* types) {
+XRAPI_ATTR XrResult XRAPI_CALL EnumerateViewConfigurations(XrInstance instance, XrSystemId systemId,
+                                                           uint32_t capacity, uint32_t* count,
+                                                           XrViewConfigurationType* types) {
   LOCK;
   if (!lookup<Instance>(handleOf(instance), Kind::Instance))
     return XR_ERROR_HANDLE_INVALID;
   if (systemId != kSystem)
     return XR_ERROR_SYSTEM_INVALID;
-  return enumerate(capacity, count, types, 1u,
-                   [](XrViewConfigurationType& t, std::uint32_t) { t = XR_VIEW_CONFIGURATION_TYPE_PRIMARY_STEREO; });
+  return enumerate(capacity, count, types, 1u, [](XrViewConfigurationType& t, std::uint32_t) {
+    t = XR_VIEW_CONFIGURATION_TYPE_PRIMARY_STEREO;
+  });
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL GetViewConfigurationProperties(XrInstance instance, XrSystemId systemId,
@@ -715,8 +728,9 @@ XRAPI_ATTR XrResult XRAPI_CALL GetViewConfigurationProperties(XrInstance instanc
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL EnumerateViewConfigurationViews(XrInstance instance, XrSystemId systemId,
-                                                               XrViewConfigurationType type, uint32_t capacity,
-                                                               uint32_t* count, XrViewConfigurationView* views) {
+                                                               XrViewConfigurationType type,
+                                                               uint32_t capacity, uint32_t* count,
+                                                               XrViewConfigurationView* views) {
   LOCK;
   if (!lookup<Instance>(handleOf(instance), Kind::Instance))
     return XR_ERROR_HANDLE_INVALID;
@@ -724,7 +738,8 @@ XRAPI_ATTR XrResult XRAPI_CALL EnumerateViewConfigurationViews(XrInstance instan
     return XR_ERROR_SYSTEM_INVALID;
   if (type != XR_VIEW_CONFIGURATION_TYPE_PRIMARY_STEREO)
     return XR_ERROR_VIEW_CONFIGURATION_TYPE_UNSUPPORTED;
-  const auto w = std::uint32_t(g_config->size[0]), h = std::uint32_t(g_config->size.size() > 1 ? g_config->size[1] : w);
+  const auto w = std::uint32_t(g_config->size[0]),
+             h = std::uint32_t(g_config->size.size() > 1 ? g_config->size[1] : w);
   return enumerate(capacity, count, views, 2u, [&](XrViewConfigurationView& v, std::uint32_t) {
     v.recommendedImageRectWidth = w;
     v.recommendedImageRectHeight = h;
@@ -749,7 +764,8 @@ XRAPI_ATTR XrResult XRAPI_CALL GetOpenGLGraphicsRequirementsKHR(XrInstance insta
   return XR_SUCCESS;
 }
 
-XRAPI_ATTR XrResult XRAPI_CALL CreateSession(XrInstance instance, const XrSessionCreateInfo* info, XrSession* session) {
+XRAPI_ATTR XrResult XRAPI_CALL CreateSession(XrInstance instance, const XrSessionCreateInfo* info,
+                                             XrSession* session) {
   LOCK;
   Instance* inst = lookup<Instance>(handleOf(instance), Kind::Instance);
   if (!inst)
@@ -840,7 +856,8 @@ XRAPI_ATTR XrResult XRAPI_CALL RequestExitSession(XrSession session) {
   return XR_SUCCESS;
 }
 
-XRAPI_ATTR XrResult XRAPI_CALL WaitFrame(XrSession session, const XrFrameWaitInfo* info, XrFrameState* state) {
+XRAPI_ATTR XrResult XRAPI_CALL WaitFrame(XrSession session, const XrFrameWaitInfo* info,
+                                         XrFrameState* state) {
   std::int64_t sleepUntil = 0;
   {
     LOCK;
@@ -950,8 +967,10 @@ XRAPI_ATTR XrResult XRAPI_CALL EndFrame(XrSession session, const XrFrameEndInfo*
       if (!poseValid(proj->views[v].pose))
         return XR_ERROR_POSE_INVALID;
       if (captureFrame == s->frame)
-        captureImage(*sc, std::uint32_t(sc->released), sub.imageRect, captureDir + "/eye" + std::to_string(v) + ".ppm");
-      for (auto* next = reinterpret_cast<const XrBaseInStructure*>(proj->views[v].next); next; next = next->next) {
+        captureImage(*sc, std::uint32_t(sc->released), sub.imageRect,
+                     captureDir + "/eye" + std::to_string(v) + ".ppm");
+      for (auto* next = reinterpret_cast<const XrBaseInStructure*>(proj->views[v].next); next;
+           next = next->next) {
         if (next->type == XR_TYPE_COMPOSITION_LAYER_DEPTH_INFO_KHR) {
           const auto* depth = reinterpret_cast<const XrCompositionLayerDepthInfoKHR*>(next);
           Swapchain* dsc = lookup<Swapchain>(handleOf(depth->subImage.swapchain), Kind::Swapchain);
@@ -971,8 +990,9 @@ XRAPI_ATTR XrResult XRAPI_CALL EndFrame(XrSession session, const XrFrameEndInfo*
   return XR_SUCCESS;
 }
 
-XRAPI_ATTR XrResult XRAPI_CALL LocateViews(XrSession session, const XrViewLocateInfo* info, XrViewState* viewState,
-                                           uint32_t capacity, uint32_t* count, XrView* views) {
+XRAPI_ATTR XrResult XRAPI_CALL LocateViews(XrSession session, const XrViewLocateInfo* info,
+                                           XrViewState* viewState, uint32_t capacity, uint32_t* count,
+                                           XrView* views) {
   LOCK;
   Session* s = lookup<Session>(handleOf(session), Kind::Session);
   if (!s)
@@ -986,9 +1006,10 @@ XRAPI_ATTR XrResult XRAPI_CALL LocateViews(XrSession session, const XrViewLocate
     return XR_ERROR_TIME_INVALID;
   Pose baseInStage;
   const bool located = spaceInStage(*s, *base, info->displayTime, baseInStage);
-  viewState->viewStateFlags = located ? XR_VIEW_STATE_ORIENTATION_VALID_BIT | XR_VIEW_STATE_POSITION_VALID_BIT |
-                                            XR_VIEW_STATE_ORIENTATION_TRACKED_BIT | XR_VIEW_STATE_POSITION_TRACKED_BIT
-                                      : 0;
+  viewState->viewStateFlags =
+      located ? XR_VIEW_STATE_ORIENTATION_VALID_BIT | XR_VIEW_STATE_POSITION_VALID_BIT |
+                    XR_VIEW_STATE_ORIENTATION_TRACKED_BIT | XR_VIEW_STATE_POSITION_TRACKED_BIT
+              : 0;
   const Pose head = headPose();
   return enumerate(capacity, count, views, 2u, [&](XrView& v, std::uint32_t i) {
     const double side = i == 0 ? -1.0 : 1.0;
@@ -1080,7 +1101,8 @@ XRAPI_ATTR XrResult XRAPI_CALL CreateActionSpace(XrSession session, const XrActi
   return XR_SUCCESS;
 }
 
-XRAPI_ATTR XrResult XRAPI_CALL LocateSpace(XrSpace space, XrSpace baseSpace, XrTime time, XrSpaceLocation* location) {
+XRAPI_ATTR XrResult XRAPI_CALL LocateSpace(XrSpace space, XrSpace baseSpace, XrTime time,
+                                           XrSpaceLocation* location) {
   LOCK;
   Space* sp = lookup<Space>(handleOf(space), Kind::Space);
   Space* base = lookup<Space>(handleOf(baseSpace), Kind::Space);
@@ -1096,7 +1118,8 @@ XRAPI_ATTR XrResult XRAPI_CALL LocateSpace(XrSpace space, XrSpace baseSpace, XrT
   }
   location->pose = toXr(b.inverse() * a);
   location->locationFlags = XR_SPACE_LOCATION_ORIENTATION_VALID_BIT | XR_SPACE_LOCATION_POSITION_VALID_BIT |
-                            XR_SPACE_LOCATION_ORIENTATION_TRACKED_BIT | XR_SPACE_LOCATION_POSITION_TRACKED_BIT;
+                            XR_SPACE_LOCATION_ORIENTATION_TRACKED_BIT |
+                            XR_SPACE_LOCATION_POSITION_TRACKED_BIT;
   return XR_SUCCESS;
 }
 
@@ -1108,8 +1131,8 @@ XRAPI_ATTR XrResult XRAPI_CALL DestroySpace(XrSpace space) {
   return XR_SUCCESS;
 }
 
-XRAPI_ATTR XrResult XRAPI_CALL EnumerateSwapchainFormats(XrSession session, uint32_t capacity, uint32_t* count,
-                                                         int64_t* formats) {
+XRAPI_ATTR XrResult XRAPI_CALL EnumerateSwapchainFormats(XrSession session, uint32_t capacity,
+                                                         uint32_t* count, int64_t* formats) {
   LOCK;
   if (!lookup<Session>(handleOf(session), Kind::Session))
     return XR_ERROR_HANDLE_INVALID;
@@ -1127,8 +1150,8 @@ XRAPI_ATTR XrResult XRAPI_CALL CreateSwapchain(XrSession session, const XrSwapch
   const auto& f = g_config->formats;
   if (std::find(f.begin(), f.end(), double(info->format)) == f.end())
     return XR_ERROR_SWAPCHAIN_FORMAT_UNSUPPORTED;
-  if (info->width == 0 || info->height == 0 || info->width > 4096 || info->height > 4096 || info->arraySize != 1 ||
-      info->faceCount != 1 || info->mipCount != 1 || info->sampleCount != 1)
+  if (info->width == 0 || info->height == 0 || info->width > 4096 || info->height > 4096 ||
+      info->arraySize != 1 || info->faceCount != 1 || info->mipCount != 1 || info->sampleCount != 1)
     return XR_ERROR_FEATURE_UNSUPPORTED;
   if (!glXGetCurrentContext() || !g_gl.load())
     return XR_ERROR_GRAPHICS_DEVICE_INVALID;
@@ -1161,8 +1184,8 @@ XRAPI_ATTR XrResult XRAPI_CALL DestroySwapchain(XrSwapchain swapchain) {
   return XR_SUCCESS;
 }
 
-XRAPI_ATTR XrResult XRAPI_CALL EnumerateSwapchainImages(XrSwapchain swapchain, uint32_t capacity, uint32_t* count,
-                                                        XrSwapchainImageBaseHeader* images) {
+XRAPI_ATTR XrResult XRAPI_CALL EnumerateSwapchainImages(XrSwapchain swapchain, uint32_t capacity,
+                                                        uint32_t* count, XrSwapchainImageBaseHeader* images) {
   LOCK;
   Swapchain* sc = lookup<Swapchain>(handleOf(swapchain), Kind::Swapchain);
   if (!sc)
@@ -1182,8 +1205,8 @@ XRAPI_ATTR XrResult XRAPI_CALL EnumerateSwapchainImages(XrSwapchain swapchain, u
   return XR_SUCCESS;
 }
 
-XRAPI_ATTR XrResult XRAPI_CALL AcquireSwapchainImage(XrSwapchain swapchain, const XrSwapchainImageAcquireInfo*,
-                                                     uint32_t* index) {
+XRAPI_ATTR XrResult XRAPI_CALL AcquireSwapchainImage(XrSwapchain swapchain,
+                                                     const XrSwapchainImageAcquireInfo*, uint32_t* index) {
   LOCK;
   Swapchain* sc = lookup<Swapchain>(handleOf(swapchain), Kind::Swapchain);
   if (!sc)
@@ -1207,7 +1230,8 @@ XRAPI_ATTR XrResult XRAPI_CALL WaitSwapchainImage(XrSwapchain swapchain, const X
   return XR_SUCCESS;
 }
 
-XRAPI_ATTR XrResult XRAPI_CALL ReleaseSwapchainImage(XrSwapchain swapchain, const XrSwapchainImageReleaseInfo*) {
+XRAPI_ATTR XrResult XRAPI_CALL ReleaseSwapchainImage(XrSwapchain swapchain,
+                                                     const XrSwapchainImageReleaseInfo*) {
   LOCK;
   Swapchain* sc = lookup<Swapchain>(handleOf(swapchain), Kind::Swapchain);
   if (!sc)
@@ -1229,8 +1253,8 @@ bool pathWellFormed(const std::string& p) {
     const char c = p[i];
     if (c == '/' && i + 1 < p.size() && p[i + 1] == '/')
       return false;
-    if (!(std::islower(static_cast<unsigned char>(c)) || std::isdigit(static_cast<unsigned char>(c)) || c == '/' ||
-          c == '-' || c == '_' || c == '.'))
+    if (!(std::islower(static_cast<unsigned char>(c)) || std::isdigit(static_cast<unsigned char>(c)) ||
+          c == '/' || c == '-' || c == '_' || c == '.'))
       return false;
   }
   return true;
@@ -1251,8 +1275,8 @@ XRAPI_ATTR XrResult XRAPI_CALL StringToPath(XrInstance instance, const char* str
   return XR_SUCCESS;
 }
 
-XRAPI_ATTR XrResult XRAPI_CALL PathToString(XrInstance instance, XrPath path, uint32_t capacity, uint32_t* count,
-                                            char* buffer) {
+XRAPI_ATTR XrResult XRAPI_CALL PathToString(XrInstance instance, XrPath path, uint32_t capacity,
+                                            uint32_t* count, char* buffer) {
   LOCK;
   Instance* inst = lookup<Instance>(handleOf(instance), Kind::Instance);
   if (!inst)
@@ -1267,7 +1291,8 @@ XRAPI_ATTR XrResult XRAPI_CALL CreateActionSet(XrInstance instance, const XrActi
   LOCK;
   if (!lookup<Instance>(handleOf(instance), Kind::Instance))
     return XR_ERROR_HANDLE_INVALID;
-  if (!pathWellFormed("/" + std::string(info->actionSetName)) || std::string(info->actionSetName).find('/') != std::string::npos)
+  if (!pathWellFormed("/" + std::string(info->actionSetName)) ||
+      std::string(info->actionSetName).find('/') != std::string::npos)
     return XR_ERROR_PATH_FORMAT_INVALID;
   for (const auto& [h, o] : g_objects) {
     if (o->kind == Kind::ActionSet && static_cast<ActionSet*>(o.get())->name == info->actionSetName)
@@ -1287,14 +1312,16 @@ XRAPI_ATTR XrResult XRAPI_CALL DestroyActionSet(XrActionSet set) {
   return XR_SUCCESS;
 }
 
-XRAPI_ATTR XrResult XRAPI_CALL CreateAction(XrActionSet set, const XrActionCreateInfo* info, XrAction* action) {
+XRAPI_ATTR XrResult XRAPI_CALL CreateAction(XrActionSet set, const XrActionCreateInfo* info,
+                                            XrAction* action) {
   LOCK;
   ActionSet* as = lookup<ActionSet>(handleOf(set), Kind::ActionSet);
   if (!as)
     return XR_ERROR_HANDLE_INVALID;
   if (as->attached)
     return XR_ERROR_ACTIONSETS_ALREADY_ATTACHED;
-  if (std::string(info->actionName).find('/') != std::string::npos || !pathWellFormed("/" + std::string(info->actionName)))
+  if (std::string(info->actionName).find('/') != std::string::npos ||
+      !pathWellFormed("/" + std::string(info->actionName)))
     return XR_ERROR_PATH_FORMAT_INVALID;
   Instance* inst = instanceOf(handleOf(set));
   auto a = std::make_unique<Action>();
@@ -1327,14 +1354,14 @@ const std::map<std::string, std::set<std::string>>& profiles() {
         "/input/system/click", "/input/a/click", "/input/b/click", "/input/grip/pose", "/input/aim/pose",
         "/output/haptic"}},
       {"/interaction_profiles/oculus/touch_controller",
-       {"/input/trigger/value", "/input/squeeze/value", "/input/menu/click", "/input/x/click", "/input/a/click",
-        "/input/grip/pose", "/input/aim/pose", "/output/haptic"}},
+       {"/input/trigger/value", "/input/squeeze/value", "/input/menu/click", "/input/x/click",
+        "/input/a/click", "/input/grip/pose", "/input/aim/pose", "/output/haptic"}},
   };
   return p;
 }
 
-XRAPI_ATTR XrResult XRAPI_CALL SuggestInteractionProfileBindings(XrInstance instance,
-                                                                 const XrInteractionProfileSuggestedBinding* s) {
+XRAPI_ATTR XrResult XRAPI_CALL
+SuggestInteractionProfileBindings(XrInstance instance, const XrInteractionProfileSuggestedBinding* s) {
   LOCK;
   Instance* inst = lookup<Instance>(handleOf(instance), Kind::Instance);
   if (!inst)
@@ -1370,7 +1397,8 @@ XRAPI_ATTR XrResult XRAPI_CALL SuggestInteractionProfileBindings(XrInstance inst
   return XR_SUCCESS;
 }
 
-XRAPI_ATTR XrResult XRAPI_CALL AttachSessionActionSets(XrSession session, const XrSessionActionSetsAttachInfo* info) {
+XRAPI_ATTR XrResult XRAPI_CALL AttachSessionActionSets(XrSession session,
+                                                       const XrSessionActionSetsAttachInfo* info) {
   LOCK;
   Session* s = lookup<Session>(handleOf(session), Kind::Session);
   if (!s)
@@ -1435,7 +1463,8 @@ XRAPI_ATTR XrResult XRAPI_CALL SyncActions(XrSession session, const XrActionsSyn
 bool componentValue(const Session& s, int hand, const std::string& component, float& value) {
   if (s.lost[hand] || s.state != XR_SESSION_STATE_FOCUSED)
     return false;
-  const double trigger = g_config->controllers[0], squeeze = g_config->controllers.size() > 1 ? g_config->controllers[1] : 0.0;
+  const double trigger = g_config->controllers[0],
+               squeeze = g_config->controllers.size() > 1 ? g_config->controllers[1] : 0.0;
   if (component == "/input/trigger/value")
     value = float(trigger);
   else if (component == "/input/trigger/click" || component == "/input/select/click")
@@ -1602,7 +1631,8 @@ XRAPI_ATTR XrResult XRAPI_CALL DestroyHandTrackerEXT(XrHandTrackerEXT tracker) {
   return XR_SUCCESS;
 }
 
-XRAPI_ATTR XrResult XRAPI_CALL LocateHandJointsEXT(XrHandTrackerEXT tracker, const XrHandJointsLocateInfoEXT* info,
+XRAPI_ATTR XrResult XRAPI_CALL LocateHandJointsEXT(XrHandTrackerEXT tracker,
+                                                   const XrHandJointsLocateInfoEXT* info,
                                                    XrHandJointLocationsEXT* locations) {
   LOCK;
   HandTracker* t = lookup<HandTracker>(handleOf(tracker), Kind::HandTracker);
@@ -1644,37 +1674,77 @@ XRAPI_ATTR XrResult XRAPI_CALL LocateHandJointsEXT(XrHandTrackerEXT tracker, con
 
 // ---- dispatch ----
 
-XRAPI_ATTR XrResult XRAPI_CALL GetInstanceProcAddr(XrInstance instance, const char* name, PFN_xrVoidFunction* function);
+XRAPI_ATTR XrResult XRAPI_CALL GetInstanceProcAddr(XrInstance instance, const char* name,
+                                                   PFN_xrVoidFunction* function);
 
 struct Entry {
   const char* name;
   PFN_xrVoidFunction fn;
   int needs;  // 0 core, 1 XR_KHR_opengl_enable, 2 XR_EXT_hand_tracking
 };
-#define FP_ENTRY(n, needs) {"xr" #n, reinterpret_cast<PFN_xrVoidFunction>(&n), needs}
+#define FP_ENTRY(n, needs) \
+  { "xr" #n, reinterpret_cast<PFN_xrVoidFunction>(&n), needs }
 const Entry kEntries[] = {
-    FP_ENTRY(GetInstanceProcAddr, 0), FP_ENTRY(EnumerateInstanceExtensionProperties, 0), FP_ENTRY(CreateInstance, 0),
-    FP_ENTRY(DestroyInstance, 0), FP_ENTRY(GetInstanceProperties, 0), FP_ENTRY(PollEvent, 0),
-    FP_ENTRY(ResultToString, 0), FP_ENTRY(StructureTypeToString, 0), FP_ENTRY(GetSystem, 0),
-    FP_ENTRY(GetSystemProperties, 0), FP_ENTRY(EnumerateEnvironmentBlendModes, 0), FP_ENTRY(CreateSession, 0),
-    FP_ENTRY(DestroySession, 0), FP_ENTRY(EnumerateReferenceSpaces, 0), FP_ENTRY(CreateReferenceSpace, 0),
-    FP_ENTRY(GetReferenceSpaceBoundsRect, 0), FP_ENTRY(CreateActionSpace, 0), FP_ENTRY(LocateSpace, 0),
-    FP_ENTRY(DestroySpace, 0), FP_ENTRY(EnumerateViewConfigurations, 0), FP_ENTRY(GetViewConfigurationProperties, 0),
-    FP_ENTRY(EnumerateViewConfigurationViews, 0), FP_ENTRY(EnumerateSwapchainFormats, 0), FP_ENTRY(CreateSwapchain, 0),
-    FP_ENTRY(DestroySwapchain, 0), FP_ENTRY(EnumerateSwapchainImages, 0), FP_ENTRY(AcquireSwapchainImage, 0),
-    FP_ENTRY(WaitSwapchainImage, 0), FP_ENTRY(ReleaseSwapchainImage, 0), FP_ENTRY(BeginSession, 0),
-    FP_ENTRY(EndSession, 0), FP_ENTRY(RequestExitSession, 0), FP_ENTRY(WaitFrame, 0), FP_ENTRY(BeginFrame, 0),
-    FP_ENTRY(EndFrame, 0), FP_ENTRY(LocateViews, 0), FP_ENTRY(StringToPath, 0), FP_ENTRY(PathToString, 0),
-    FP_ENTRY(CreateActionSet, 0), FP_ENTRY(DestroyActionSet, 0), FP_ENTRY(CreateAction, 0), FP_ENTRY(DestroyAction, 0),
-    FP_ENTRY(SuggestInteractionProfileBindings, 0), FP_ENTRY(AttachSessionActionSets, 0),
-    FP_ENTRY(GetCurrentInteractionProfile, 0), FP_ENTRY(GetActionStateBoolean, 0), FP_ENTRY(GetActionStateFloat, 0),
-    FP_ENTRY(GetActionStateVector2f, 0), FP_ENTRY(GetActionStatePose, 0), FP_ENTRY(SyncActions, 0),
-    FP_ENTRY(ApplyHapticFeedback, 0), FP_ENTRY(GetOpenGLGraphicsRequirementsKHR, 1),
-    FP_ENTRY(CreateHandTrackerEXT, 2), FP_ENTRY(DestroyHandTrackerEXT, 2), FP_ENTRY(LocateHandJointsEXT, 2),
+    FP_ENTRY(GetInstanceProcAddr, 0),
+    FP_ENTRY(EnumerateInstanceExtensionProperties, 0),
+    FP_ENTRY(CreateInstance, 0),
+    FP_ENTRY(DestroyInstance, 0),
+    FP_ENTRY(GetInstanceProperties, 0),
+    FP_ENTRY(PollEvent, 0),
+    FP_ENTRY(ResultToString, 0),
+    FP_ENTRY(StructureTypeToString, 0),
+    FP_ENTRY(GetSystem, 0),
+    FP_ENTRY(GetSystemProperties, 0),
+    FP_ENTRY(EnumerateEnvironmentBlendModes, 0),
+    FP_ENTRY(CreateSession, 0),
+    FP_ENTRY(DestroySession, 0),
+    FP_ENTRY(EnumerateReferenceSpaces, 0),
+    FP_ENTRY(CreateReferenceSpace, 0),
+    FP_ENTRY(GetReferenceSpaceBoundsRect, 0),
+    FP_ENTRY(CreateActionSpace, 0),
+    FP_ENTRY(LocateSpace, 0),
+    FP_ENTRY(DestroySpace, 0),
+    FP_ENTRY(EnumerateViewConfigurations, 0),
+    FP_ENTRY(GetViewConfigurationProperties, 0),
+    FP_ENTRY(EnumerateViewConfigurationViews, 0),
+    FP_ENTRY(EnumerateSwapchainFormats, 0),
+    FP_ENTRY(CreateSwapchain, 0),
+    FP_ENTRY(DestroySwapchain, 0),
+    FP_ENTRY(EnumerateSwapchainImages, 0),
+    FP_ENTRY(AcquireSwapchainImage, 0),
+    FP_ENTRY(WaitSwapchainImage, 0),
+    FP_ENTRY(ReleaseSwapchainImage, 0),
+    FP_ENTRY(BeginSession, 0),
+    FP_ENTRY(EndSession, 0),
+    FP_ENTRY(RequestExitSession, 0),
+    FP_ENTRY(WaitFrame, 0),
+    FP_ENTRY(BeginFrame, 0),
+    FP_ENTRY(EndFrame, 0),
+    FP_ENTRY(LocateViews, 0),
+    FP_ENTRY(StringToPath, 0),
+    FP_ENTRY(PathToString, 0),
+    FP_ENTRY(CreateActionSet, 0),
+    FP_ENTRY(DestroyActionSet, 0),
+    FP_ENTRY(CreateAction, 0),
+    FP_ENTRY(DestroyAction, 0),
+    FP_ENTRY(SuggestInteractionProfileBindings, 0),
+    FP_ENTRY(AttachSessionActionSets, 0),
+    FP_ENTRY(GetCurrentInteractionProfile, 0),
+    FP_ENTRY(GetActionStateBoolean, 0),
+    FP_ENTRY(GetActionStateFloat, 0),
+    FP_ENTRY(GetActionStateVector2f, 0),
+    FP_ENTRY(GetActionStatePose, 0),
+    FP_ENTRY(SyncActions, 0),
+    FP_ENTRY(ApplyHapticFeedback, 0),
+    FP_ENTRY(GetOpenGLGraphicsRequirementsKHR, 1),
+    FP_ENTRY(CreateHandTrackerEXT, 2),
+    FP_ENTRY(DestroyHandTrackerEXT, 2),
+    FP_ENTRY(LocateHandJointsEXT, 2),
 };
 #undef FP_ENTRY
 
-XRAPI_ATTR XrResult XRAPI_CALL GetInstanceProcAddr(XrInstance instance, const char* name, PFN_xrVoidFunction* function) {
+XRAPI_ATTR XrResult XRAPI_CALL GetInstanceProcAddr(XrInstance instance, const char* name,
+                                                   PFN_xrVoidFunction* function) {
   LOCK;
   if (!name || !function)
     return XR_ERROR_VALIDATION_FAILURE;
@@ -1685,7 +1755,8 @@ XRAPI_ATTR XrResult XRAPI_CALL GetInstanceProcAddr(XrInstance instance, const ch
     if (instance != XR_NULL_HANDLE)
       return XR_ERROR_HANDLE_INVALID;
     // before an instance exists only these may be asked for
-    if (n != "xrEnumerateInstanceExtensionProperties" && n != "xrCreateInstance" && n != "xrGetInstanceProcAddr")
+    if (n != "xrEnumerateInstanceExtensionProperties" && n != "xrCreateInstance" &&
+        n != "xrGetInstanceProcAddr")
       return XR_ERROR_HANDLE_INVALID;
   }
   for (const Entry& e : kEntries) {
