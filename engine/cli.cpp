@@ -3,10 +3,8 @@
 #include <tbb/global_control.h>
 #include <tbb/info.h>
 
-#include <array>
 #include <cmath>
 #include <filesystem>
-#include <sstream>
 #include <stdexcept>
 
 #include "engine/cli_app.h"
@@ -232,51 +230,15 @@ CliOptions parseCommandLine(const std::vector<std::string>& args) {
 }
 
 std::string applySetting(sim::SimParams& params, const std::string& keyValue) {
-  const std::size_t eq = keyValue.find('=');
-  if (eq == std::string::npos || eq == 0)
-    return "expects KEY=VALUE, got '" + keyValue + "'";
-  const std::string key = keyValue.substr(0, eq);
-  const std::string value = keyValue.substr(eq + 1);
-  const sim::ParamInfo* info = sim::ParamTable::sim().find(key);
-  if (!info)
-    return "unknown parameter '" + key + "'";
-  try {
-    if (info->kind == sim::ParamKind::Vector3) {
-      std::array<double, 3> v{};
-      std::stringstream in(value);
-      std::string item;
-      int n = 0;
-      while (std::getline(in, item, ',')) {
-        if (n == 3)
-          return key + " expects x,y,z, got '" + value + "'";
-        v[std::size_t(n++)] = parseNumber(key, item);
-      }
-      if (n != 3)
-        return key + " expects x,y,z, got '" + value + "'";
-      return sim::ParamTable::setVec3(params, *info, v);
-    }
-    double number = 0.0;
-    if (info->kind == sim::ParamKind::Boolean && (value == "true" || value == "false"))
-      number = value == "true" ? 1.0 : 0.0;
-    else
-      number = parseNumber(key, value);
-    return sim::ParamTable::setScalar(params, *info, number);
-  } catch (const std::invalid_argument& e) {
-    return e.what();
-  }
+  return sim::ParamTable::sim().assign(params, keyValue);
 }
 
 void applySettings(sim::SimParams& params, const std::vector<std::string>& keyValues) {
-  for (const std::string& kv : keyValues) {
-    const std::string error = applySetting(params, kv);
-    if (!error.empty())
-      throw std::invalid_argument("--set: " + error);
-  }
-  if (!keyValues.empty()) {
-    const std::string error = sim::ParamTable::validate(params);
-    if (!error.empty())
-      throw std::invalid_argument("--set: " + error);
-  }
+  if (keyValues.empty())
+    return;
+  const std::string error = sim::ParamTable::sim().assignAll(params, keyValues);
+  if (!error.empty())
+    throw std::invalid_argument("--set: " + error);
 }
 
 void overrideScene(sim::SceneDesc& scene, const SceneOverrides& overrides) {

@@ -123,9 +123,9 @@ CLI::Option* CommandLine::addInteger(const std::string& name, std::function<void
 }
 
 CLI::Option* CommandLine::addSeed(std::function<void(std::uint64_t)> set) {
-  const sim::ParamInfo* seed = sim::ParamTable::sim().find("seed");
+  const sim::ParamInfo& seed = sim::ParamTable::sim().at("seed");
   return addInteger(
-      "--seed", [set](long long v) { set(std::uint64_t(v)); }, (long long)seed->min, (long long)seed->max,
+      "--seed", [set](long long v) { set(std::uint64_t(v)); }, (long long)seed.min, (long long)seed.max,
       "seed of every random choice (overrides the scene's)");
 }
 
