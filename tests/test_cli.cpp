@@ -35,7 +35,9 @@ struct ExeRun {
 
 // runs the executable with `args`, keeping stdout and the lines of stderr
 ExeRun runExeOutput(const std::string& args) {
-  const std::string base = ::testing::TempDir() + "/fp_cli_run";
+  // one file pair per test: ctest runs the tests of this suite in parallel processes
+  const std::string base =
+      ::testing::TempDir() + "/fp_cli_run_" + ::testing::UnitTest::GetInstance()->current_test_info()->name();
   const std::string cmd =
       std::string(FP_FLUIDPLAYING_EXE) + " " + args + " > " + base + ".out 2> " + base + ".err";
   const int status = std::system(cmd.c_str());
