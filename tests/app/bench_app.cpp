@@ -26,14 +26,15 @@ class Meter : public AppPlatform {
  public:
   explicit Meter(DesktopPlatform& w) : window(w) {}
   bool running() override { return window.running(); }
-  void input(AppSession& session, double wallDt) override {
+  FrameClock beginFrame() override { return window.beginFrame(); }
+  void input(AppSession& session, const FrameClock& clock) override {
     if (frames++ > 0) {
       const SessionStats& s = session.stats();
       const FrameTiming& t = window.timing();
       samples.push_back({s.frameMs, s.simMs, s.waitMs, t.render, t.ui, t.capture, t.input, t.present,
                          double(s.steps), double(s.realTimeFactor.last())});
     }
-    window.input(session, wallDt);
+    window.input(session, clock);
   }
   void capture(AppSession& session, int frame) override { window.capture(session, frame); }
   void draw(AppSession& session, int frame) override { window.draw(session, frame); }

@@ -56,7 +56,8 @@ class EditingPlatform : public AppPlatform {
   int fineBefore = -1;
   double depth = 0.0;
   bool running() override { return true; }
-  void input(AppSession& session, double) override {
+  FrameClock beginFrame() override { return FrameClock{}; }  // fixed steps: the session advances one frame
+  void input(AppSession& session, const FrameClock&) override {
     if (frame == editFrame) {
       fineBefore = fineBelow(session.simulation(), depth);
       const sim::ParamTable& table = sim::ParamTable::sim();
