@@ -11,6 +11,7 @@
 
 #include "engine/cli.h"
 #include "engine/headless_runner.h"
+#include "engine/scene_loader.h"
 #include "render/camera.h"
 #include "sim/scene.h"
 
@@ -312,6 +313,36 @@ TEST(HeadlessRunnerTest, WritesSummaryStatsAndFramesSmall) {
   printSummary(summary, s);
   EXPECT_NE(summary.str().find("us per particle-step"), std::string::npos);
   EXPECT_THROW(writeStatsJson("/nonexistent/dir/stats.json", s), fp::sim::InputError);
+}
+
+TEST(HeadlessRunnerTest, TheAppLoopStepsLikeAPlainLoop) {
+  // the headless run goes through runAppLoop in fixed frames; the simulation must step exactly as a plain
+  // loop over Simulation::step to the same end, and the figures be those of the same state
+  const ThreadLimit threads(1);
+  CliOptions o;
+  o.headless = true;
+  o.quiet = true;
+  o.scenePath = scene("tiny_dam_break.json");
+  o.mode = "fluidplaying";
+  o.simTime = 0.11;  // not a whole number of frames: the last frame stops at the end
+  std::ostringstream out, progress;
+  int callbacks = 0;
+  const RunSummary s = runHeadless(
+      o, out, progress, [&](int frame, const fp::sim::Simulation&, const fp::sim::SplashParticles&) {
+        EXPECT_EQ(frame, callbacks++);
+      });
+  fp::sim::SceneDesc desc = fp::engine::loadScene(o.scenePath);
+  desc.mode = fp::sim::AdaptivityMode::FluidPlaying;
+  fp::sim::Simulation plain(desc);
+  while (plain.time() < 0.11 - 1e-12)
+    plain.step();
+  EXPECT_EQ(s.steps, plain.stepCount());
+  EXPECT_EQ(s.simSeconds, plain.time());
+  EXPECT_EQ(s.particlesFinal, plain.particles().size());
+  EXPECT_EQ(s.momentumFinal, plain.totalMomentum());
+  EXPECT_EQ(s.massFinal, plain.totalMass());
+  EXPECT_EQ(s.frames, 6);  // 0.11 s at 60 Hz: six whole frames after the initial state
+  EXPECT_EQ(callbacks, 7);
 }
 
 TEST(CameraTest, FramesABoxAndProjectsItsCentreToTheMiddle) {
