@@ -241,18 +241,7 @@ DesktopPlatform::DesktopPlatform(const CliOptions& options, std::optional<int> f
     glfwTerminate();
     throw;
   }
-  render::RenderSettings& s = m->renderer->settings();
-  if (options.view == "particles") {
-    s.view = render::RenderSettings::View::Particles;
-    if (!options.colorField.empty())
-      s.colorField = *render::parseColorField(options.colorField);
-  }
-  if (options.highlightTime) {
-    s.highlightSplits = *options.highlightTime > 0.0;
-    if (s.highlightSplits)
-      s.highlightDuration = float(*options.highlightTime);
-  }
-  s.showSpray = !options.noSpray;
+  applyRenderOptions(options, m->renderer->settings());
   m->panel.visible = !options.noPanel;
   m->panel.scenes = availableScenes();
   m->screenshotPath = options.screenshot;

@@ -13,6 +13,7 @@
 #include "engine/headless_runner.h"
 #include "engine/scene_loader.h"
 #include "render/camera.h"
+#include "render/render_settings.h"
 #include "sim/scene.h"
 
 using namespace fp::engine;
@@ -207,6 +208,33 @@ TEST(CliTest, SetIsCheckedByTheParameterTable) {
   EXPECT_EQ(
       runExe("--headless --quiet --frames 1 --scene " + scene("tiny_dam_break.json") + " --set dt_min=0.009"),
       kExitUsage);
+}
+
+TEST(CliTest, RenderOptionsGoThroughTheRenderSettingsTable) {
+  // --set sorts its settings by table; the render options are aliases of render settings
+  const CliOptions o = parseCommandLine({"--render", "--out", "i", "--set", "view=particles", "--set",
+                                         "dt_max=0.002", "--set", "filter_iterations=3"});
+  EXPECT_EQ(o.sets, (std::vector<std::string>{"dt_max=0.002"}));
+  EXPECT_EQ(o.renderSets, (std::vector<std::string>{"view=particles", "filter_iterations=3"}));
+  fp::render::RenderSettings settings;
+  applyRenderOptions(o, settings);
+  EXPECT_EQ(settings.view, fp::render::RenderSettings::View::Particles);
+  EXPECT_EQ(settings.filterIterations, 3);
+  fp::render::RenderSettings aliased;
+  applyRenderOptions(parseCommandLine({"--color", "speed", "--no-spray", "--highlight-time", "0"}), aliased);
+  EXPECT_EQ(aliased.view, fp::render::RenderSettings::View::Particles);
+  EXPECT_EQ(aliased.colorField, fp::render::ColorField::Speed);
+  EXPECT_FALSE(aliased.showSpray);
+  EXPECT_FALSE(aliased.highlightSplits);
+  fp::render::RenderSettings longer;
+  applyRenderOptions(parseCommandLine({"--highlight-time", "2"}), longer);
+  EXPECT_TRUE(longer.highlightSplits);
+  EXPECT_FLOAT_EQ(longer.highlightDuration, 2.0f);
+  // the table's messages and ranges
+  EXPECT_NE(messageOf({"--set", "view=wire"}).find("fluid or particles"), std::string::npos);
+  EXPECT_NE(messageOf({"--set", "viewz=fluid"}).find("did you mean view"), std::string::npos);
+  EXPECT_THROW(parseCommandLine({"--highlight-time", "20"}), std::invalid_argument);  // the table's max
+  EXPECT_THROW(parseCommandLine({"--headless", "--set", "view=particles"}), std::invalid_argument);
 }
 
 TEST(CliTest, SetAndSeedReachTheRun) {
