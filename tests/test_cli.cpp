@@ -182,6 +182,27 @@ TEST(CliTest, ABadCommandLineIsExitTwoAndOneLine) {
   }
 }
 
+TEST(CliTest, TheBenchmarksShareTheCommandLine) {
+  // every executable: --help exits 0, a bad option or setting exits 2 with one line naming the program
+  std::istringstream exes(FP_BENCH_EXES);
+  for (std::string exe; exes >> exe;) {
+    const std::string name = std::filesystem::path(exe).filename().string();
+    const std::string err = ::testing::TempDir() + "/fp_bench_cli_" + name + ".err";
+    EXPECT_EQ(std::system((exe + " --help > /dev/null 2> " + err).c_str()), 0) << name;
+    for (const char* args : {"--no-such-flag", "--set no_such_key=1"}) {
+      const int status = std::system((exe + " " + args + " > /dev/null 2> " + err).c_str());
+      ASSERT_TRUE(WIFEXITED(status));
+      EXPECT_EQ(WEXITSTATUS(status), kExitUsage) << name << " " << args;
+      std::ifstream in(err);
+      std::vector<std::string> lines;
+      for (std::string line; std::getline(in, line);)
+        lines.push_back(line);
+      ASSERT_EQ(lines.size(), 1u) << name << " " << args;
+      EXPECT_EQ(lines[0].rfind(name + ": ", 0), 0u) << lines[0];
+    }
+  }
+}
+
 TEST(CliTest, SetIsCheckedByTheParameterTable) {
   const CliOptions o =
       parseCommandLine({"--set", "dt_max=0.002", "--set", "gravity=0,-5,0", "--set=warm_start=0"});
