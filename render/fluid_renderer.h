@@ -55,9 +55,12 @@ struct RenderSettings {
   bool showSpray = true;                   ///< draw splash particles
   bool showColliders = true;               ///< draw floor, container and bodies
   int filterIterations = 2;                ///< narrow-range filter passes (each horizontal + vertical), >= 0
-  float filterRadius = 3.0f;               ///< filter half-width in particle radii, > 0
-  float filterMaxPixels = 16.0f;           ///< cap on the filter half-width [px]
-  float filterRange = 3.0f;                ///< depth range kept by the filter, in particle radii
+  float filterRadius = 6.0f;               ///< filter half-width in fine particle radii, > 0
+  float filterMaxPixels = 64.0f;           ///< cap on the filter half-width [px]
+  int filterMaxTaps = 16;                  ///< most sample pairs a pixel and pass; wider filters stride, >= 1
+  float filterRange = 10.0f;               ///< depth range kept by the filter, in fine particle radii
+  float wetReach = 3.0f;                   ///< spheres this many radii behind the glass wet it (0: off)
+  float surfaceRadiusCap = 0.0f;           ///< depth pass: largest impostor radius in fine radii (0: none)
   Eigen::Vector3f absorption{2.2f, 0.55f, 0.3f};  ///< Beer-Lambert coefficient per channel [1/m]
   float refraction = 0.04f;        ///< screen-space refraction offset at full thickness [view units]
   float highlightStrength = 1.0f;  ///< red density of a fresh child, per particle radius of thickness
@@ -109,9 +112,11 @@ class FluidRenderer {
   const PassTimes& passTimes() const { return m_times; }
   /// particles uploaded by the last update()
   std::size_t particleCount() const;
+  /// The filtered eye depth of the water drawn by the last fluid-view renderView [m], 0 where there is none:
+  /// width * height values, rows from the bottom (for the image tests and tools; stalls the pipeline).
+  std::vector<float> readSurfaceDepth() const;
 
  private:
-  void drawLegend();
   struct Impl;
   std::unique_ptr<Impl> m_impl;
   RenderSettings m_settings;

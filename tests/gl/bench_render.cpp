@@ -1,6 +1,6 @@
 // Renderer benchmark (not a test): frame time per pass at 1280x720 for about 30k and 120k particles of a wavy
 // water body in a glass tank, through OSMesa (llvmpipe here). Prints a table and CSV.
-//   fp_bench_render [--frames N] [--png DIR] [--width W --height H]
+//   fp_bench_render [--frames N] [--png DIR] [--width W --height H] [--set NAME=VALUE ...]
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -14,6 +14,7 @@
 #include "render/offscreen_context.h"
 #include "render/shader_program.h"
 #include "synthetic_scene.h"
+#include "water_look_scenes.h"
 
 using namespace fp;
 
@@ -45,24 +46,33 @@ test::SyntheticScene waveScene(int count) {
 int main(int argc, char** argv) {
   int frames = 5, width = 1280, height = 720;
   std::string pngDir;
+  std::vector<std::string> sets;
   for (int k = 1; k < argc; ++k) {
     const std::string a = argv[k];
     if (a == "--frames" && k + 1 < argc)
       frames = std::max(1, std::atoi(argv[++k]));
     else if (a == "--png" && k + 1 < argc)
       pngDir = argv[++k];
+    else if (a == "--set" && k + 1 < argc)
+      sets.push_back(argv[++k]);
     else if (a == "--width" && k + 1 < argc)
       width = std::max(16, std::atoi(argv[++k]));
     else if (a == "--height" && k + 1 < argc)
       height = std::max(16, std::atoi(argv[++k]));
     else {
-      std::cerr << "usage: fp_bench_render [--frames N] [--png DIR] [--width W --height H]\n";
+      std::cerr << "usage: fp_bench_render [--frames N] [--png DIR] [--width W --height H] [--set NAME=VALUE]\n";
       return 2;
     }
   }
   render::OffscreenContext context(width, height);
   render::FluidRenderer renderer(render::defaultShaderDir());
   renderer.settings().profile = true;
+  for (const std::string& setting : sets) {
+    if (!test::applySetting(renderer.settings(), setting)) {
+      std::cerr << "unknown setting " << setting << "\n";
+      return 2;
+    }
+  }
   std::cout << "renderer benchmark, " << width << "x" << height << ", " << frames
             << " frames after one warm-up, " << context.description() << "\n\n";
   const char* header =
