@@ -57,12 +57,11 @@ void FluidRenderer::Impl::drawGlass(const ViewParams& v, bool backFaces) {
 }
 
 void FluidRenderer::Impl::drawSpheres(const ViewParams& v, ShaderProgram& p, GLuint vao, GLsizei count,
-                                      float highlight, int w, int h, float radiusCap, float spriteScale) {
+                                      float highlight, int w, int h, float spriteScale) {
   viewUniforms(p, v);
   p.set("uViewport", Eigen::Vector2f(float(w), float(h)));
   p.set("uMaxPointSize", maxPointSize);
   p.set("uSpriteScale", spriteScale);
-  p.set("uMaxRadius", radiusCap);
   p.set("uHighlightDuration", highlight);
   glEnable(GL_PROGRAM_POINT_SIZE);
   glBindVertexArray(vao);
@@ -117,7 +116,8 @@ void FluidRenderer::Impl::drawThickness(const ViewParams& v) {
     glBindTexture(GL_TEXTURE_2D, sceneDepth.id);
     sphereThickness.use();
     sphereThickness.set("uSceneDepth", 0);
-    drawSpheres(v, sphereThickness, particleVao.id, GLsizei(particleCount), v.highlight, halfWidth, halfHeight);
+    drawSpheres(v, sphereThickness, particleVao.id, GLsizei(particleCount), v.highlight, halfWidth,
+                halfHeight);
   }
   glDisable(GL_BLEND);
   glEnable(GL_DEPTH_TEST);
@@ -130,8 +130,7 @@ void FluidRenderer::Impl::drawDepth(const ViewParams& v) {
   glClear(GL_COLOR_BUFFER_BIT);
   if (!particleCount)
     return;
-  drawSpheres(v, sphereDepth, particleVao.id, GLsizei(particleCount), 0.0f, width, height,
-              s.surfaceRadiusCap * fineRadius);
+  drawSpheres(v, sphereDepth, particleVao.id, GLsizei(particleCount), 0.0f, width, height);
   const Collider* box = container();
   if (box && wetCount) {
     // the glass wetted by the spheres next to it (listed by update()), nearer than those spheres
@@ -144,7 +143,6 @@ void FluidRenderer::Impl::drawDepth(const ViewParams& v) {
     sphereWet.set("uViewport", Eigen::Vector2f(float(width), float(height)));
     sphereWet.set("uMaxPointSize", maxPointSize);
     sphereWet.set("uSpriteScale", 1.5f);
-    sphereWet.set("uMaxRadius", 0.0f);
     sphereWet.set("uHighlightDuration", 0.0f);
     glEnable(GL_PROGRAM_POINT_SIZE);
     glBindVertexArray(wetVao.id);

@@ -149,8 +149,7 @@ void FluidRenderer::Impl::updateFloor(const FrameData& frame) {
   const float h = floorHalf;
   const float corners[6][2] = {{-h, -h}, {-h, h}, {h, h}, {-h, -h}, {h, h}, {h, -h}};
   for (const auto& xz : corners) {
-    quad.vertices.insert(quad.vertices.end(),
-                         {center.x() + xz[0], y, center.z() + xz[1], 0.0f, 1.0f, 0.0f});
+    quad.vertices.insert(quad.vertices.end(), {center.x() + xz[0], y, center.z() + xz[1], 0.0f, 1.0f, 0.0f});
   }
   meshAttributes(floorVao, floorVbo, quad);
 }

@@ -15,12 +15,12 @@ namespace fp::render {
 
 /// What every pass of one renderView reads.
 struct ViewParams {
-  Mat4 view;                  ///< world to view
-  Mat4 projection;            ///< view to clip
-  Mat4 invView;               ///< view to world
-  Eigen::Vector3f eye;        ///< camera position, world [m]
+  Mat4 view;            ///< world to view
+  Mat4 projection;      ///< view to clip
+  Mat4 invView;         ///< view to world
+  Eigen::Vector3f eye;  ///< camera position, world [m]
   const RenderSettings* settings = nullptr;
-  float highlight = 0.0f;     ///< split highlight duration [s], 0: off
+  float highlight = 0.0f;  ///< split highlight duration [s], 0: off
 };
 
 struct FluidRenderer::Impl {
@@ -95,7 +95,7 @@ struct FluidRenderer::Impl {
   // helpers of the passes
   void drawGlass(const ViewParams& v, bool backFaces);
   void drawSpheres(const ViewParams& v, ShaderProgram& p, GLuint vao, GLsizei count, float highlight, int w,
-                   int h, float radiusCap = 0.0f, float spriteScale = 1.0f);
+                   int h, float spriteScale = 1.0f);
 };
 
 }  // namespace fp::render

@@ -9,7 +9,6 @@ uniform mat4 uProj;
 uniform vec2 uViewport;       // size of the pass's viewport [px]
 uniform float uMaxPointSize;  // the context's largest point size [px]
 uniform float uSpriteScale;  // sprites this much larger than the sphere (room for the glass it wets)
-uniform float uMaxRadius;  // > 0: impostors no larger than this [m]
 uniform float uHighlightDuration;  // <= 0: no highlight
 flat out vec3 vCenter;
 flat out float vRadius;
@@ -18,7 +17,7 @@ flat out float vValue;
 
 void main() {
   vCenter = (uView * vec4(aCenter, 1.0)).xyz;
-  vRadius = uMaxRadius > 0.0 ? min(aRadius, uMaxRadius) : aRadius;
+  vRadius = aRadius;
   bool fresh = uHighlightDuration > 0.0 && aSplitAge >= 0.0 && aSplitAge < uHighlightDuration;
   vHighlight = fresh ? 1.0 - aSplitAge / uHighlightDuration : 0.0;
   vValue = aValue;

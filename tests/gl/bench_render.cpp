@@ -1,6 +1,6 @@
 // Renderer benchmark (not a test): frame time per pass at 1280x720 for about 30k and 120k particles of a wavy
 // water body in a glass tank, through OSMesa (llvmpipe here). Prints a table and CSV.
-//   fp_bench_render [--frames N] [--png DIR] [--width W --height H] [--set NAME=VALUE ...]
+//   fp_bench_render [--frames N] [--png DIR] [--width W --height H] [--set KEY=VALUE ...]
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -60,7 +60,8 @@ int main(int argc, char** argv) {
     else if (a == "--height" && k + 1 < argc)
       height = std::max(16, std::atoi(argv[++k]));
     else {
-      std::cerr << "usage: fp_bench_render [--frames N] [--png DIR] [--width W --height H] [--set NAME=VALUE]\n";
+      std::cerr
+          << "usage: fp_bench_render [--frames N] [--png DIR] [--width W --height H] [--set KEY=VALUE]\n";
       return 2;
     }
   }
@@ -68,8 +69,9 @@ int main(int argc, char** argv) {
   render::FluidRenderer renderer(render::defaultShaderDir());
   renderer.settings().profile = true;
   for (const std::string& setting : sets) {
-    if (!test::applySetting(renderer.settings(), setting)) {
-      std::cerr << "unknown setting " << setting << "\n";
+    const std::string error = test::applySetting(renderer.settings(), setting);
+    if (!error.empty()) {
+      std::cerr << error << "\n";
       return 2;
     }
   }

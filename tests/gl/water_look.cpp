@@ -1,8 +1,8 @@
 // The figures of issue 14 (not a test): renders the resting hand tank at uniform-high and fluidplaying and a
 // moving propeller frame through OSMesa, and prints the resting surface's normal rms and height error, the
 // adaptive-vs-uniform difference and the crease fraction of each, read from the renderer's own buffers.
-//   fp_water_look [--width W --height H] [--png DIR] [--set NAME=VALUE ...]
-// --set changes a RenderSettings member by name (filterIterations, filterRadius, ...) for experiments.
+//   fp_water_look [--width W --height H] [--png DIR] [--set KEY=VALUE ...]
+// --set changes a render setting (filter_radius=6, filter_max_taps=24, wet_reach=0, ...) for experiments.
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -31,15 +31,16 @@ int main(int argc, char** argv) {
     else if (a == "--set" && k + 1 < argc)
       sets.push_back(argv[++k]);
     else {
-      std::cerr << "usage: fp_water_look [--width W --height H] [--png DIR] [--set NAME=VALUE ...]\n";
+      std::cerr << "usage: fp_water_look [--width W --height H] [--png DIR] [--set KEY=VALUE ...]\n";
       return 2;
     }
   }
   render::OffscreenContext context(width, height);
   render::FluidRenderer renderer(render::defaultShaderDir());
   for (const std::string& s : sets) {
-    if (!test::applySetting(renderer.settings(), s)) {
-      std::cerr << "unknown setting " << s << "\n";
+    const std::string error = test::applySetting(renderer.settings(), s);
+    if (!error.empty()) {
+      std::cerr << error << "\n";
       return 2;
     }
   }
@@ -54,17 +55,20 @@ int main(int argc, char** argv) {
     shots[m] = test::shoot(renderer, scene, width, height);
     const test::RestingSurface r = test::measureRestingSurface(shots[m].surface, scene.surfaceY, scene.inner);
     const test::Creases c = test::measureCreases(shots[m].surface, 2, 20.0f, scene.fineRadius);
-    std::printf("resting %-13s normal rms %6.2f deg  height error mean %+6.2f mm rms %5.2f mm (%.2f fine radii)  "
-                "coverage %.3f of %zu px  creases %.4f\n",
-                modes[m], r.rmsNormalDegrees, 1e3 * r.meanHeightError, 1e3 * r.rmsHeightError,
-                r.meanHeightError / scene.fineRadius, r.coverage, r.pixels, c.fraction);
+    std::printf(
+        "resting %-13s normal rms %6.2f deg  height error mean %+6.2f mm rms %5.2f mm (%.2f fine radii)  "
+        "coverage %.3f of %zu px  creases %.4f\n",
+        modes[m], r.rmsNormalDegrees, 1e3 * r.meanHeightError, 1e3 * r.rmsHeightError,
+        r.meanHeightError / scene.fineRadius, r.coverage, r.pixels, c.fraction);
     if (!pngDir.empty())
       render::writePng(pngDir + "/rest_" + modes[m] + ".png", shots[m].image);
   }
-  const test::WaterDifference d = test::compareWater(shots[0].image, shots[1].image, shots[0].depth, shots[1].depth, 24);
-  std::printf("adaptive vs uniform at rest: mean %.2f levels over %zu water px (%.2f over the image), %.2f %% over "
-              "24 levels\n",
-              d.meanLevels, d.waterPixels, d.imageMeanLevels, 100.0 * d.fractionOver);
+  const test::WaterDifference d =
+      test::compareWater(shots[0].image, shots[1].image, shots[0].depth, shots[1].depth, 24);
+  std::printf(
+      "adaptive vs uniform at rest: mean %.2f levels over %zu water px (%.2f over the image), %.2f %% over "
+      "24 levels\n",
+      d.meanLevels, d.waterPixels, d.imageMeanLevels, 100.0 * d.fractionOver);
   for (const auto& [name, scene] : {std::make_pair("propeller fluidplaying", test::movingPropeller())}) {
     const test::LookShot shot = test::shoot(renderer, scene, width, height);
     const test::Creases c = test::measureCreases(shot.surface, 2, 20.0f, scene.fineRadius);

@@ -1,7 +1,8 @@
 #pragma once
 // The scenes of issue 14's look tests, from particle states exported by the simulation (tests/gl/data/):
 //   hand_tank_rest_*.ply   assets/scenes/hand_tank.json, no hand, frame 90 (1.5 s), --mode uniform-high or
-//                          fluidplaying: `fluidplaying --headless --scene assets/scenes/hand_tank.json --mode M
+//                          fluidplaying: `fluidplaying --headless --scene assets/scenes/hand_tank.json --mode
+//                          M
 //                          --frames 90 --export DIR`
 //   propeller_moving.ply   assets/scenes/propeller.json, fluidplaying, frame 60 (1 s): fine and coarse
 //                          particles stirred by the propeller
@@ -10,6 +11,7 @@
 #include <cstdlib>
 #include <string>
 
+#include "render/render_settings.h"
 #include "water_metrics.h"
 
 namespace fp::test {
@@ -28,8 +30,9 @@ inline std::string lookDataDir() {
 inline LookScene restingHandTank(bool adaptive) {
   LookScene s;
   const Eigen::Vector3f tank(0.28f, 0.15f, 0.1849f);
-  s.state = loadTankState(lookDataDir() + (adaptive ? "/hand_tank_rest_fluidplaying.ply" : "/hand_tank_rest_uniform_high.ply"),
-                          tank, s.fineRadius);
+  s.state = loadTankState(
+      lookDataDir() + (adaptive ? "/hand_tank_rest_fluidplaying.ply" : "/hand_tank_rest_uniform_high.ply"),
+      tank, s.fineRadius);
   // four fine spacings from the walls, where the surface meets the glass
   const float margin = 8.0f * s.fineRadius;
   s.inner = Eigen::AlignedBox2f(Eigen::Vector2f(-tank.x() + margin, -tank.z() + margin),
@@ -69,30 +72,21 @@ inline LookShot shoot(render::FluidRenderer& renderer, const LookScene& scene, i
   return shot;
 }
 
-// NAME=VALUE for a numeric RenderSettings member (experiments of fp_water_look); false for an unknown name.
-inline bool applySetting(render::RenderSettings& s, const std::string& assignment) {
+// KEY=VALUE of the render settings table (filter_radius=6, ...) or of the internal members filter_max_taps
+// and wet_reach (experiments of fp_water_look and fp_bench_render); "" or the error.
+inline std::string applySetting(render::RenderSettings& s, const std::string& assignment) {
   const auto eq = assignment.find('=');
-  if (eq == std::string::npos)
-    return false;
   const std::string name = assignment.substr(0, eq);
-  const float v = std::strtof(assignment.c_str() + eq + 1, nullptr);
-  if (name == "filterIterations")
-    s.filterIterations = int(v);
-  else if (name == "filterRadius")
-    s.filterRadius = v;
-  else if (name == "filterMaxPixels")
-    s.filterMaxPixels = v;
-  else if (name == "filterRange")
-    s.filterRange = v;
-  else if (name == "filterMaxTaps")
-    s.filterMaxTaps = int(v);
-  else if (name == "wetReach")
+  const float v = eq == std::string::npos ? 0.0f : std::strtof(assignment.c_str() + eq + 1, nullptr);
+  if (name == "filter_max_taps") {
+    s.filterMaxTaps = std::max(1, int(v));
+    return "";
+  }
+  if (name == "wet_reach") {
     s.wetReach = v;
-  else if (name == "surfaceRadiusCap")
-    s.surfaceRadiusCap = v;
-  else
-    return false;
-  return true;
+    return "";
+  }
+  return render::RenderSettingsTable::get().assign(s, assignment);
 }
 
 }  // namespace fp::test

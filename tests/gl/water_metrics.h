@@ -21,7 +21,8 @@ namespace fp::test {
 
 // A particle state exported by `fluidplaying --headless --export` (tests/gl/data/*.ply) in its box tank
 // standing on y = 0, with the scene's fine particle radius.
-inline SyntheticScene loadTankState(const std::string& ply, const Eigen::Vector3f& tankHalf, float fineRadius) {
+inline SyntheticScene loadTankState(const std::string& ply, const Eigen::Vector3f& tankHalf,
+                                    float fineRadius) {
   SyntheticScene s;
   s.particles = sim::readPly(ply);
   for (std::size_t i = 0; i < s.particles.size(); ++i)
@@ -43,14 +44,16 @@ inline SyntheticScene loadTankState(const std::string& ply, const Eigen::Vector3
 
 // The simulated free surface: the median over x-z columns (2 fine radii wide, inside `inner`) of the highest
 // sphere top y + H/4 [m].
-inline float simulatedSurfaceHeight(const sim::ParticleSet& p, float fineRadius, const Eigen::AlignedBox2f& inner) {
+inline float simulatedSurfaceHeight(const sim::ParticleSet& p, float fineRadius,
+                                    const Eigen::AlignedBox2f& inner) {
   const float cell = 2.0f * fineRadius;
   std::unordered_map<long long, float> tops;
   for (std::size_t i = 0; i < p.size(); ++i) {
     const Eigen::Vector2f xz(p.x[i].x(), p.x[i].z());
     if (!inner.contains(xz))
       continue;
-    const long long key = (long long)(std::floor(xz.x() / cell)) * 100000 + (long long)(std::floor(xz.y() / cell));
+    const long long key =
+        (long long)(std::floor(xz.x() / cell)) * 100000 + (long long)(std::floor(xz.y() / cell));
     const float top = p.x[i].y() + 0.25f * p.H[i];
     auto [it, fresh] = tops.emplace(key, top);
     if (!fresh)
@@ -104,8 +107,10 @@ class DepthSurface {
     const Eigen::Vector3f c = viewPosition(x, y, z);
     auto diff = [&](int dx, int dy) -> Eigen::Vector3f {
       const float zf = depth(x + dx, y + dy), zb = depth(x - dx, y - dy);
-      const Eigen::Vector3f f = zf > 0 ? Eigen::Vector3f(viewPosition(x + dx, y + dy, zf) - c) : Eigen::Vector3f::Zero();
-      const Eigen::Vector3f b = zb > 0 ? Eigen::Vector3f(c - viewPosition(x - dx, y - dy, zb)) : Eigen::Vector3f::Zero();
+      const Eigen::Vector3f f =
+          zf > 0 ? Eigen::Vector3f(viewPosition(x + dx, y + dy, zf) - c) : Eigen::Vector3f::Zero();
+      const Eigen::Vector3f b =
+          zb > 0 ? Eigen::Vector3f(c - viewPosition(x - dx, y - dy, zb)) : Eigen::Vector3f::Zero();
       if (zf <= 0)
         return b;
       if (zb <= 0)
@@ -137,7 +142,8 @@ struct RestingSurface {
   double rmsHeightError = 0;    // rms of the same [m]
 };
 
-inline RestingSurface measureRestingSurface(const DepthSurface& s, float surfaceY, const Eigen::AlignedBox2f& inner) {
+inline RestingSurface measureRestingSurface(const DepthSurface& s, float surfaceY,
+                                            const Eigen::AlignedBox2f& inner) {
   RestingSurface r;
   double angle2 = 0, dh = 0, dh2 = 0;
   std::size_t water = 0;
@@ -174,14 +180,16 @@ inline RestingSurface measureRestingSurface(const DepthSurface& s, float surface
 // How two renderings differ over the water (pixels where either has water).
 struct WaterDifference {
   std::size_t waterPixels = 0;
-  double meanLevels = 0;      // mean absolute channel difference over the water [0, 255]
-  double fractionOver = 0;    // fraction of the water's pixels with a channel differing by more than the tolerance
-  double imageMeanLevels = 0; // the same mean over the whole image
+  double meanLevels = 0;  // mean absolute channel difference over the water [0, 255]
+  double fractionOver =
+      0;  // fraction of the water's pixels with a channel differing by more than the tolerance
+  double imageMeanLevels = 0;  // the same mean over the whole image
 };
 
 // `depthA` and `depthB` rows from the bottom, images rows from the top.
-inline WaterDifference compareWater(const render::Image& a, const render::Image& b, const std::vector<float>& depthA,
-                                    const std::vector<float>& depthB, int tolerance) {
+inline WaterDifference compareWater(const render::Image& a, const render::Image& b,
+                                    const std::vector<float>& depthA, const std::vector<float>& depthB,
+                                    int tolerance) {
   WaterDifference d;
   double sum = 0, all = 0;
   std::size_t over = 0;
