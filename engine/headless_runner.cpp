@@ -104,7 +104,7 @@ RunSummary runHeadless(const CliOptions& options, std::ostream& out, std::ostrea
     exportFrame(options.exportDir, frame, simulation.particles());
   measure();
   if (onFrame)
-    onFrame(frame, simulation);
+    onFrame(frame, simulation, splash.splash());
   const auto start = Clock::now();
   auto lastReport = start;
   try {
@@ -116,7 +116,7 @@ RunSummary runHeadless(const CliOptions& options, std::ostream& out, std::ostrea
           exportFrame(options.exportDir, frame, simulation.particles());
         measure();
         if (onFrame)
-          onFrame(frame, simulation);
+          onFrame(frame, simulation, splash.splash());
       }
       const auto now = Clock::now();
       if (!options.quiet && std::chrono::duration<double>(now - lastReport).count() > 2.0) {

@@ -8,6 +8,7 @@
 
 #include "engine/cli.h"
 #include "sim/simulation.h"
+#include "sim/splash.h"
 
 namespace fp::engine {
 
@@ -47,9 +48,11 @@ struct RunSummary {
   double adaptivityShare = 0;       ///< "adaptivity_share": share of step time in levels and adaptation [-]
 };
 
-/// Called with every frame (frame 0 is the initial state), after the PLY export: the headless renderer writes
-/// its images here.
-using FrameCallback = std::function<void(int frame, const sim::Simulation& simulation)>;
+/// Called with every frame (frame 0 is the initial state), after the PLY export, with the frame's splash (the
+/// one the statistics measured, so the renderer need not generate its own): the headless renderer writes its
+/// images here.
+using FrameCallback =
+    std::function<void(int frame, const sim::Simulation& simulation, const sim::SplashParticles& splash)>;
 
 /// Runs the scene of `options` headless. Throws sim::InputError for a bad scene or unwritable output; an
 /// instability ends the run and is reported in the summary (status "unstable").

@@ -60,15 +60,20 @@ int runHeadlessMode(const CliOptions& options) {
     render = std::make_unique<HeadlessRender>(options);
     if (!options.quiet) {
       std::cout << "rendering " << options.width << "x" << options.height << " " << options.view
-                << " view into " << options.outDir << " (" << render->contextDescription() << ")\n";
+                << " view into " << (options.outDir.empty() ? options.videoPath : options.outDir) << " ("
+                << render->contextDescription() << ")\n";
     }
-    onFrame = [&render](int frame, const fp::sim::Simulation& simulation) {
-      render->renderFrame(frame, simulation);
+    onFrame = [&render](int frame, const fp::sim::Simulation& simulation,
+                        const fp::sim::SplashParticles& splash) {
+      render->renderFrame(frame, simulation, &splash);
     };
   }
   const RunSummary summary = runHeadless(options, std::cout, std::cerr, onFrame);
   printSummary(std::cout, summary);
   if (render) {
+    render->finish();
+    if (!options.videoPath.empty())
+      std::cout << "video                " << options.videoPath << "\n";
     std::cout << "images               " << render->imagesWritten() << " (" << render->meanMilliseconds()
               << " ms each)\n";
   }

@@ -18,6 +18,7 @@
 #include "render/offscreen_context.h"
 #include "render/render_error.h"
 #include "render/shader_program.h"
+#include "render/video_writer.h"
 #include "synthetic_scene.h"
 
 using namespace fp;
@@ -475,4 +476,21 @@ TEST(HeadlessRenderTest, ADamBreakFrameWithSplashHasSprayPixels) {
   const auto [disabled, disabledCount] = renderTo("fp_headless_spray_disabled", false);
   EXPECT_EQ(disabledCount, 0u);
   EXPECT_EQ(changedPixels(disabled, without, 0).size(), 0u);
+}
+
+TEST(HeadlessRenderTest, WritesAVideoAtTheSceneFrameRate) {
+  if (render::VideoWriter::findFfmpeg().empty())
+    GTEST_SKIP() << "ffmpeg is not on PATH: no video to write";
+  const fs::path video = fs::path(::testing::TempDir()) / "fp_headless.mp4";
+  fs::remove(video);
+  const std::string scene = std::string(FP_SOURCE_DIR) + "/assets/scenes/tiny_dam_break.json";
+  const int status =
+      std::system(("env -u DISPLAY " + std::string(FP_FLUIDPLAYING_EXE) +
+                   " --headless --render --quiet --threads 1 --scene " + scene +
+                   " --frames 3 --width 96 --height 64 --video " + video.string() + " > /dev/null 2>&1")
+                      .c_str());
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0);
+  ASSERT_TRUE(fs::exists(video));
+  EXPECT_GT(fs::file_size(video), 0u);
 }
