@@ -32,7 +32,10 @@ Eigen::AlignedBox3f sceneViewBox(const sim::Simulation& simulation) {
 }
 
 HeadlessRender::HeadlessRender(const CliOptions& options)
-    : m_outDir(options.outDir), m_videoPath(options.videoPath), m_width(options.width), m_height(options.height) {
+    : m_outDir(options.outDir),
+      m_videoPath(options.videoPath),
+      m_width(options.width),
+      m_height(options.height) {
   std::error_code ec;
   if (!m_outDir.empty()) {
     std::filesystem::create_directories(m_outDir, ec);
