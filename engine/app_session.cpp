@@ -139,6 +139,32 @@ input::PoseTrack AppSession::stopRecording() {
   return out;
 }
 
+std::string AppSession::toggleRecording(const std::string& path) {
+  if (!recording()) {
+    startRecording();
+    return "recording the hand (F5 stops)";
+  }
+  try {
+    stopRecording().save(path);
+    return "hand motion saved to " + path;
+  } catch (const sim::InputError& e) {
+    return e.what();
+  }
+}
+
+std::string AppSession::toggleReplay(const std::string& path) {
+  if (replaying()) {
+    stopReplay();
+    return "";
+  }
+  try {
+    startReplay(input::PoseTrack::load(path));
+  } catch (const sim::InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
 double AppSession::meanRealTimeFactor() const {
   return m_wallTotal > 0.0 ? m_simTotal / m_wallTotal : 0.0;
 }

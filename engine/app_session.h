@@ -150,6 +150,12 @@ class AppSession {
   input::PoseTrack stopRecording();
   /// true while recording
   bool recording() const { return m_recording.has_value(); }
+  /// F5 and the panel's button: starts recording the hand, or stops and saves the recording as `path`;
+  /// returns the status line (what was saved, or why not)
+  std::string toggleRecording(const std::string& path);
+  /// F6 and the panel's button: replays the recording in `path`, or stops the replay; returns the status line
+  /// (empty, or why the file cannot be replayed)
+  std::string toggleReplay(const std::string& path);
   /// the frames' simulated-time targets keep the hand: the pose the mouse hand has now is where the hand is
   /// at the end of the coming frame's steps
   void setHandTarget(const input::HandPose& pose) { m_handTarget = pose; }

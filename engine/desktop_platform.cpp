@@ -164,28 +164,11 @@ void DesktopPlatform::Impl::handleKey(AppSession& session, int key) {
                                                              : render::RenderSettings::View::Fluid;
       break;
     case GLFW_KEY_F5:
-      if (session.recording()) {
-        try {
-          session.stopRecording().save(panel.recordingPath);
-          panel.message = "hand motion saved to " + panel.recordingPath;
-        } catch (const sim::InputError& e) {
-          panel.message = e.what();
-        }
-      } else {
-        session.startRecording();
-        panel.message = "recording the hand (F5 stops)";
-      }
+      panel.message = session.toggleRecording(panel.recordingPath);
       break;
     case GLFW_KEY_F6:
-      if (session.replaying()) {
-        session.stopReplay();
-      } else {
-        try {
-          session.startReplay(input::PoseTrack::load(panel.recordingPath));
-        } catch (const sim::InputError& e) {
-          panel.message = e.what();
-        }
-      }
+      if (std::string message = session.toggleReplay(panel.recordingPath); !message.empty())
+        panel.message = std::move(message);
       break;
     case GLFW_KEY_F8:
       panel.recordVideo = !panel.recordVideo;

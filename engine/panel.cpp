@@ -180,28 +180,13 @@ void handControls(AppSession& session, PanelState& state) {
   std::snprintf(path, sizeof(path), "%s", state.recordingPath.c_str());
   if (ImGui::InputText("recording", path, sizeof(path)))
     state.recordingPath = path;
-  if (!session.recording()) {
-    if (ImGui::Button("Record hand (F5)"))
-      session.startRecording();
-  } else if (ImGui::Button("Stop and save (F5)")) {
-    try {
-      session.stopRecording().save(state.recordingPath);
-      state.message = "hand motion saved to " + state.recordingPath;
-    } catch (const sim::InputError& e) {
-      state.message = e.what();
-    }
-  }
+  // the same as F5 and F6 (engine/desktop_platform.cpp)
+  if (ImGui::Button(session.recording() ? "Stop and save (F5)" : "Record hand (F5)"))
+    state.message = session.toggleRecording(state.recordingPath);
   ImGui::SameLine();
-  if (!session.replaying()) {
-    if (ImGui::Button("Replay file (F6)")) {
-      try {
-        session.startReplay(input::PoseTrack::load(state.recordingPath));
-      } catch (const sim::InputError& e) {
-        state.message = e.what();
-      }
-    }
-  } else if (ImGui::Button("Stop replay (F6)")) {
-    session.stopReplay();
+  if (ImGui::Button(session.replaying() ? "Stop replay (F6)" : "Replay file (F6)")) {
+    if (std::string message = session.toggleReplay(state.recordingPath); !message.empty())
+      state.message = std::move(message);
   }
 }
 

@@ -228,3 +228,20 @@ TEST(PresetTest, SaveLoadRoundTripAndErrors) {
   std::ofstream(path) << R"({"mode": "adaptive"})";
   EXPECT_THROW(loadPreset(path, Preset{}), sim::InputError);
 }
+
+TEST(AppSessionTest, RecordingAndReplayToggleAsF5AndF6Do) {
+  SessionConfig config;
+  config.scenePath = smallTank("uniform-low");
+  AppSession session(config);
+  const std::string path = ::testing::TempDir() + "/fp_toggle_recording.csv";
+  EXPECT_NE(session.toggleRecording(path).find("recording"), std::string::npos);
+  EXPECT_TRUE(session.recording());
+  EXPECT_NE(session.toggleRecording(path).find("saved"), std::string::npos);
+  EXPECT_FALSE(session.recording());
+  EXPECT_EQ(session.toggleReplay(path), "");
+  EXPECT_TRUE(session.replaying());
+  EXPECT_EQ(session.toggleReplay(path), "");
+  EXPECT_FALSE(session.replaying());
+  EXPECT_NE(session.toggleReplay("/nonexistent/hand.csv"), "");  // why not, for the status line
+  EXPECT_FALSE(session.replaying());
+}
