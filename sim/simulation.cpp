@@ -287,7 +287,10 @@ void Simulation::computeLevels(bool smooth) {
                    m_target);
   const Real mFine = m_latticeMass;
   const Real mBase = baseMass();
-  const Real gamma = smooth ? Real(m_params.massSmoothing) : Real(1);
+  // the levels of every adaptation step move the target as far as k steps of smoothing would
+  const Real gamma =
+      smooth ? Real(1.0 - std::pow(1.0 - m_params.massSmoothing, std::max(1, m_params.adaptationPeriod)))
+             : Real(1);
   for (std::size_t i = 0; i < m_fluid.size(); ++i) {
     const Real m = m_fluid.mOpt[i] + gamma * (m_target[i] - m_fluid.mOpt[i]);
     m_fluid.mOpt[i] = std::clamp(m, mFine, std::max(mFine, mBase));
@@ -452,6 +455,14 @@ void Simulation::step() {
     // the lists of this step's start still index the particles: nothing was reordered since
     if (adaptNow)
       st.adaptivity = adaptResolution(false);
+    if (st.adaptivity.splits + st.adaptivity.merges > 0) {
+      // the particles were added and removed: the lists no longer index them (capacity is kept for the next
+      // search)
+      m_fluidNbrs.offsets.clear();
+      m_fluidNbrs.indices.clear();
+      m_boundaryNbrs.offsets.clear();
+      m_boundaryNbrs.indices.clear();
+    }
     Adaptivity::blendSupports(m_fluid, m_params, m_latticeMass);
     st.times.adaptation = seconds(t8, Clock::now());
   }
