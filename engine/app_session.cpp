@@ -246,14 +246,9 @@ void AppSession::applyRequests() {
   for (const sim::ParamInfo& info : sim::ParamTable::sim().entries()) {
     if (info.live)
       continue;
-    if (info.kind == sim::ParamKind::Vector3) {
-      if (sim::ParamTable::getVec3(next, info) != sim::ParamTable::getVec3(m_sim->params(), info)) {
-        pending = true;
-        sim::ParamTable::setVec3(next, info, sim::ParamTable::getVec3(m_sim->params(), info));
-      }
-    } else if (sim::ParamTable::getScalar(next, info) != sim::ParamTable::getScalar(m_sim->params(), info)) {
+    if (!sim::ParamTable::equal(info, next, m_sim->params())) {
       pending = true;
-      sim::ParamTable::setScalar(next, info, sim::ParamTable::getScalar(m_sim->params(), info));
+      sim::ParamTable::copy(info, m_sim->params(), next);
     }
   }
   m_sim->params() = next;

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <utility>
 
 #include "engine/presets.h"
 
@@ -204,64 +205,86 @@ void parameterGroup(AppSession& session, const std::string& group, std::string& 
 
 }  // namespace
 
-bool parameterWidget(sim::SimParams& params, const sim::ParamInfo& info, std::string& message) {
+namespace {
+
+/// One widget for any table's entry: the value's type picks the widget, the table's setter checks the range.
+template <class S>
+bool entryWidget(S& values, const sim::ParamEntry<S>& info, std::string& message) {
+  using Table = sim::ParamTableOf<S>;
   const std::string label = info.key + (info.live ? "" : " *");
-  bool changed = false;
   std::string error;
-  switch (info.kind) {
-    case sim::ParamKind::Number: {
-      double v = sim::ParamTable::getScalar(params, info);
-      const double range = info.max - info.min;
-      const float speed = float(std::max(std::abs(v) * 0.005, std::min(range, 10.0) * 1e-3));
-      if (ImGui::DragScalar(label.c_str(), ImGuiDataType_Double, &v, speed, &info.min, &info.max, "%.4g",
-                            ImGuiSliderFlags_AlwaysClamp)) {
-        error = sim::ParamTable::setScalar(params, info, v);
-        changed = error.empty();
-      }
-      break;
-    }
-    case sim::ParamKind::Integer: {
-      int v = int(sim::ParamTable::getScalar(params, info));
-      if (ImGui::DragInt(label.c_str(), &v, 0.2f, int(info.min), int(info.max), "%d",
-                         ImGuiSliderFlags_AlwaysClamp)) {
-        error = sim::ParamTable::setScalar(params, info, double(v));
-        changed = error.empty();
-      }
-      break;
-    }
-    case sim::ParamKind::Boolean: {
-      bool v = sim::ParamTable::getScalar(params, info) != 0.0;
-      if (ImGui::Checkbox(label.c_str(), &v)) {
-        error = sim::ParamTable::setScalar(params, info, v ? 1.0 : 0.0);
-        changed = error.empty();
-      }
-      break;
-    }
-    case sim::ParamKind::Vector3: {
-      std::array<double, 3> v = sim::ParamTable::getVec3(params, info);
-      if (ImGui::DragScalarN(label.c_str(), ImGuiDataType_Double, v.data(), 3, 0.05f, &info.min, &info.max,
-                             "%.3g", ImGuiSliderFlags_AlwaysClamp)) {
-        error = sim::ParamTable::setVec3(params, info, v);
-        changed = error.empty();
-      }
-      break;
-    }
-    case sim::ParamKind::Seed: {
-      ImU64 v = ImU64(sim::ParamTable::getScalar(params, info));
-      if (ImGui::InputScalar(label.c_str(), ImGuiDataType_U64, &v)) {
-        error = sim::ParamTable::setScalar(params, info, double(v));
-        changed = error.empty();
-      }
-      break;
-    }
-  }
+  bool edited = false;
+  // Widgets edit a copy; the table's setter stores it (or says why not).
+  sim::visit(info, std::as_const(values),
+             sim::Overloaded{
+                 [&](double v) {
+                   const double range = info.max - info.min;
+                   const float speed = float(std::max(std::abs(v) * 0.005, std::min(range, 10.0) * 1e-3));
+                   if (ImGui::DragScalar(label.c_str(), ImGuiDataType_Double, &v, speed, &info.min, &info.max,
+                                         "%.4g", ImGuiSliderFlags_AlwaysClamp)) {
+                     edited = true;
+                     error = Table::setScalar(values, info, v);
+                   }
+                 },
+                 [&](float v) {
+                   const float range = float(info.max - info.min);
+                   const float speed = std::max(std::abs(v) * 0.005f, std::min(range, 10.0f) * 1e-3f);
+                   if (ImGui::DragFloat(label.c_str(), &v, speed, float(info.min), float(info.max), "%.4g",
+                                        ImGuiSliderFlags_AlwaysClamp)) {
+                     edited = true;
+                     error = Table::setScalar(values, info, double(v));
+                   }
+                 },
+                 [&](int v) {
+                   if (ImGui::DragInt(label.c_str(), &v, 0.2f, int(info.min), int(info.max), "%d",
+                                      ImGuiSliderFlags_AlwaysClamp)) {
+                     edited = true;
+                     error = Table::setScalar(values, info, double(v));
+                   }
+                 },
+                 [&](bool v) {
+                   if (ImGui::Checkbox(label.c_str(), &v)) {
+                     edited = true;
+                     error = Table::setScalar(values, info, v ? 1.0 : 0.0);
+                   }
+                 },
+                 [&](std::uint64_t v) {
+                   ImU64 u = ImU64(v);
+                   if (ImGui::InputScalar(label.c_str(), ImGuiDataType_U64, &u)) {
+                     edited = true;
+                     error = Table::setScalar(values, info, double(u));
+                   }
+                 },
+                 [&](std::array<double, 3> v) {
+                   if (ImGui::DragScalarN(label.c_str(), ImGuiDataType_Double, v.data(), 3, 0.05f, &info.min,
+                                          &info.max, "%.3g", ImGuiSliderFlags_AlwaysClamp)) {
+                     edited = true;
+                     error = Table::setVec3(values, info, v);
+                   }
+                 },
+                 [&](const sim::Choice& c) {
+                   int index = c.index;
+                   std::vector<const char*> names;
+                   for (const std::string& n : info.choices)
+                     names.push_back(n.c_str());
+                   if (ImGui::Combo(label.c_str(), &index, names.data(), int(names.size()))) {
+                     edited = true;
+                     error = Table::setScalar(values, info, double(index));
+                   }
+                 }});
   if (ImGui::IsItemHovered()) {
     ImGui::SetTooltip("%s [%s]\nrange [%g, %g]%s", info.description.c_str(), info.unit.c_str(), info.min,
                       info.max, info.live ? "" : "\n* applies on Reset (R)");
   }
   if (!error.empty())
     message = error;
-  return changed;
+  return edited && error.empty();
+}
+
+}  // namespace
+
+bool parameterWidget(sim::SimParams& params, const sim::ParamInfo& info, std::string& message) {
+  return entryWidget(params, info, message);
 }
 
 void drawPanel(AppSession& session, PanelState& state, render::RenderSettings& settings) {

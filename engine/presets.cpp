@@ -2,29 +2,20 @@
 
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <type_traits>
+#include <utility>
 
 namespace fp::engine {
 
 void savePreset(const std::string& path, const Preset& preset) {
   nlohmann::ordered_json params = nlohmann::ordered_json::object();
   for (const sim::ParamInfo& info : sim::ParamTable::sim().entries()) {
-    switch (info.kind) {
-      case sim::ParamKind::Vector3:
-        params[info.key] = sim::ParamTable::getVec3(preset.params, info);
-        break;
-      case sim::ParamKind::Boolean:
-        params[info.key] = sim::ParamTable::getScalar(preset.params, info) != 0.0;
-        break;
-      case sim::ParamKind::Integer:
-        params[info.key] = static_cast<long long>(sim::ParamTable::getScalar(preset.params, info));
-        break;
-      case sim::ParamKind::Seed:
-        params[info.key] = preset.params.seed;
-        break;
-      case sim::ParamKind::Number:
-        params[info.key] = sim::ParamTable::getScalar(preset.params, info);
-        break;
-    }
+    sim::visit(info, preset.params, [&](const auto& v) {
+      if constexpr (std::is_same_v<std::decay_t<decltype(v)>, sim::Choice>)
+        params[info.key] = v.name();
+      else
+        params[info.key] = v;
+    });
   }
   nlohmann::ordered_json j;
   j["mode"] = sim::modeName(preset.mode);
@@ -69,22 +60,28 @@ Preset loadPreset(const std::string& path, const Preset& base) {
       const sim::ParamInfo* info = sim::ParamTable::sim().find(key);
       if (!info)
         throw sim::InputError(where + "unknown parameter");
-      std::string error;
-      if (info->kind == sim::ParamKind::Vector3) {
-        if (!value.is_array() || value.size() != 3 || !value[0].is_number() || !value[1].is_number() ||
-            !value[2].is_number())
-          throw sim::InputError(where + "expected an array of 3 numbers");
-        error = sim::ParamTable::setVec3(
-            p.params, *info, {value[0].get<double>(), value[1].get<double>(), value[2].get<double>()});
-      } else if (info->kind == sim::ParamKind::Boolean) {
-        if (!value.is_boolean())
-          throw sim::InputError(where + "expected true or false");
-        error = sim::ParamTable::setScalar(p.params, *info, value.get<bool>() ? 1.0 : 0.0);
-      } else {
-        if (!value.is_number())
-          throw sim::InputError(where + "expected a number");
-        error = sim::ParamTable::setScalar(p.params, *info, value.get<double>());
-      }
+      const std::string error = sim::visit(*info, std::as_const(p.params), [&](const auto& current) {
+        using T = std::decay_t<decltype(current)>;
+        if constexpr (std::is_same_v<T, std::array<double, 3>>) {
+          if (!value.is_array() || value.size() != 3 || !value[0].is_number() || !value[1].is_number() ||
+              !value[2].is_number())
+            throw sim::InputError(where + "expected an array of 3 numbers");
+          return sim::ParamTable::setVec3(
+              p.params, *info, {value[0].get<double>(), value[1].get<double>(), value[2].get<double>()});
+        } else if constexpr (std::is_same_v<T, bool>) {
+          if (!value.is_boolean())
+            throw sim::InputError(where + "expected true or false");
+          return sim::ParamTable::setScalar(p.params, *info, value.get<bool>() ? 1.0 : 0.0);
+        } else if constexpr (std::is_same_v<T, sim::Choice>) {
+          if (!value.is_string())
+            throw sim::InputError(where + "expected a string");
+          return sim::ParamTable::setChoice(p.params, *info, value.get<std::string>());
+        } else {
+          if (!value.is_number())
+            throw sim::InputError(where + "expected a number");
+          return sim::ParamTable::setScalar(p.params, *info, value.get<double>());
+        }
+      });
       if (!error.empty())
         throw sim::InputError(where + error);
     }

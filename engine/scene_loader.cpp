@@ -392,22 +392,20 @@ void SceneReader::readParameters(const json& j, const std::string& path, sim::Si
       fail(itemPath,
            "unknown parameter" + suggestion(item.key(), known) + " (known: " + joinNames(known) + ")");
     }
-    std::string error;
-    switch (info->kind) {
-      case sim::ParamKind::Vector3: {
+    // the member's type says what JSON value to read; the table's setters check the range
+    const std::string error = sim::visit(*info, std::as_const(params), [&](const auto& current) {
+      using T = std::decay_t<decltype(current)>;
+      if constexpr (std::is_same_v<T, std::array<double, 3>>) {
         const sim::Vec3d v = readVec3(item.value(), itemPath);
-        error = sim::ParamTable::setVec3(params, *info, {v.x(), v.y(), v.z()});
-        break;
+        return sim::ParamTable::setVec3(params, *info, {v.x(), v.y(), v.z()});
+      } else if constexpr (std::is_same_v<T, bool>) {
+        return sim::ParamTable::setScalar(params, *info, readBool(item.value(), itemPath) ? 1.0 : 0.0);
+      } else if constexpr (std::is_same_v<T, sim::Choice>) {
+        return sim::ParamTable::setChoice(params, *info, readString(item.value(), itemPath));
+      } else {
+        return sim::ParamTable::setScalar(params, *info, readNumber(item.value(), itemPath));
       }
-      case sim::ParamKind::Boolean:
-        error = sim::ParamTable::setScalar(params, *info, readBool(item.value(), itemPath) ? 1.0 : 0.0);
-        break;
-      case sim::ParamKind::Number:
-      case sim::ParamKind::Integer:
-      case sim::ParamKind::Seed:
-        error = sim::ParamTable::setScalar(params, *info, readNumber(item.value(), itemPath));
-        break;
-    }
+    });
     if (!error.empty())
       fail(itemPath, error);
   }
