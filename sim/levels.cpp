@@ -261,6 +261,24 @@ void LevelEstimator::compute(ParticleSet& p, const NeighborList& fluidNbrs, cons
     if (!distancePass(p, fluidNbrs, cap, dynamic && pass == 0))
       break;
   }
+  // CFL-aware refinement: the fine particles at the surface set the time step (dt = cfl 2 r / v there), and
+  // a particle refined for its vorticity or velocity difference must not force a smaller one. A particle
+  // moving at v takes the surface's step at a radius of r v / v_surface, a mass of m_fine (v / v_surface)^3:
+  // the dynamic levels refine it down to that mass, no further.
+  const bool cflLimit = dynamic && params.cflLimitedRefinement;
+  double surfaceSpeed2 = 0.0;
+  if (cflLimit) {
+    for (std::size_t i = 0; i < n; ++i) {
+      if (p.phi[i] <= Real(lo))
+        surfaceSpeed2 = std::max(surfaceSpeed2, double(p.v[i].squaredNorm()));
+    }
+  }
+  // a margin for particles that speed up between the levels and their split
+  constexpr double kCflSpeedMargin = 1.1;
+  // the step a fine particle allows at unit speed, and the target step: the surface's, at most dt_max
+  const double fineLimit = params.cflFactor * 2.0 * double(r);
+  const double dtTarget =
+      surfaceSpeed2 > 0.0 ? std::min(params.dtMax, fineLimit / std::sqrt(surfaceSpeed2)) : params.dtMax;
   target.resize(n);
   tbb::parallel_for(Range(0, n, kGrain), [&](const Range& rg) {
     for (std::size_t i = rg.begin(); i < rg.end(); ++i) {
@@ -275,7 +293,18 @@ void LevelEstimator::compute(ParticleSet& p, const NeighborList& fluidNbrs, cons
       p.levelPhi[i] = Real(rPhi);
       p.levelOmega[i] = Real(rOmega);
       p.levelNu[i] = Real(rNu);
-      target[i] = Real(optimalMass(rPhi, rOmega, rNu, double(mFine), mBase));
+      double m = optimalMass(rPhi, rOmega, rNu, double(mFine), mBase);
+      if (cflLimit) {
+        const double mSurface = optimalMass(rPhi, 1.0, 1.0, double(mFine), mBase);
+        if (m < mSurface) {
+          // the radius over the fine one at which this particle allows the target step
+          const double ratio =
+              kCflSpeedMargin * std::sqrt(double(p.v[i].squaredNorm())) * dtTarget / fineLimit;
+          const double mCfl = double(mFine) * std::min(1e6, ratio * ratio * ratio);
+          m = std::max(m, std::min(mSurface, mCfl));
+        }
+      }
+      target[i] = Real(m);
     }
   });
 }

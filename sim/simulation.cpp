@@ -287,10 +287,9 @@ void Simulation::computeLevels(bool smooth) {
                    m_target);
   const Real mFine = m_latticeMass;
   const Real mBase = baseMass();
-  // the levels of every adaptation step move the target as far as k steps of smoothing would
-  const Real gamma =
-      smooth ? Real(1.0 - std::pow(1.0 - m_params.massSmoothing, std::max(1, m_params.adaptationPeriod)))
-             : Real(1);
+  // levels computed every k solver steps move the target as far as k steps of smoothing would
+  const int k = std::max(1, m_params.adaptationPeriod) * std::max(1, m_params.levelsPeriod);
+  const Real gamma = smooth ? Real(1.0 - std::pow(1.0 - m_params.massSmoothing, k)) : Real(1);
   for (std::size_t i = 0; i < m_fluid.size(); ++i) {
     const Real m = m_fluid.mOpt[i] + gamma * (m_target[i] - m_fluid.mOpt[i]);
     m_fluid.mOpt[i] = std::clamp(m, mFine, std::max(mFine, mBase));
@@ -418,7 +417,11 @@ void Simulation::step() {
   st.times.density = seconds(t2, t3);
   const bool adaptNow =
       adaptive() && m_stepCount % std::uint64_t(std::max(1, m_params.adaptationPeriod)) == 0;
-  if (adaptNow) {
+  // the levels of every levels_period-th adaptation step; the optimal masses are kept in between
+  const bool levelsNow = adaptNow && m_stepCount % (std::uint64_t(std::max(1, m_params.adaptationPeriod)) *
+                                                    std::uint64_t(std::max(1, m_params.levelsPeriod))) ==
+                                         0;
+  if (levelsNow) {
     computeLevels(true);
     const auto tl = Clock::now();
     st.times.levels = seconds(t3, tl);
