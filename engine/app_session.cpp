@@ -4,6 +4,7 @@
 #include <cmath>
 #include <filesystem>
 
+#include "engine/cli.h"
 #include "engine/scene_loader.h"
 
 namespace fp::engine {
@@ -60,14 +61,7 @@ AppSession::AppSession(const SessionConfig& config) : m_config(config) {
   fixedStep = config.fixedStep;
   timeScale = std::clamp(config.timeScale, 0.01, 4.0);
   m_scene = loadScene(config.scenePath);
-  if (config.seed)
-    m_scene.params.seed = *config.seed;
-  if (!config.mode.empty()) {
-    const auto mode = sim::parseMode(config.mode);
-    if (!mode)
-      throw sim::InputError("unknown mode '" + config.mode + "' (expected " + sim::modeNames() + ")");
-    m_scene.mode = *mode;
-  }
+  overrideScene(m_scene, {config.mode, config.seed, config.sets});
   m_params = m_scene.params;
   m_mode = m_scene.mode;
   if (!config.handScript.empty())
