@@ -159,6 +159,12 @@ struct Declaration {
               ->type_name("DIR")
               ->group(headless)
               ->needs(render);
+    app.add_option("--video", o.videoPath,
+                   "also write the rendered frames as a video at the scene's frame rate, through the ffmpeg "
+                   "program")
+        ->type_name("FILE.mp4")
+        ->group(headless)
+        ->needs(render);
 
     for (const char* side : {"--width", "--height"}) {
       int& target = std::string(side) == "--width" ? o.width : o.height;
@@ -243,8 +249,8 @@ CliOptions parseCommandLine(const std::vector<std::string>& args) {
     throw std::invalid_argument(w->get_name() + " applies to the window, not --headless");
   if (!o.headless && o.simTime)
     throw std::invalid_argument("--sim-time needs --headless (the window runs until closed or --frames)");
-  if (o.render && o.outDir.empty())
-    throw std::invalid_argument("--render needs --out DIR");
+  if (o.render && o.outDir.empty() && o.videoPath.empty())
+    throw std::invalid_argument("--render needs --out DIR or --video FILE.mp4");
   if (d.color->count() > 0) {
     if (d.view->count() > 0 && o.view == "fluid")
       throw std::invalid_argument("--color applies to --view particles, not --view fluid");

@@ -43,6 +43,7 @@ struct CliOptions {
   // rendering (headless, through OSMesa)
   bool render = false;                  ///< --render: write a PNG of every frame (implies --headless)
   std::string outDir;                   ///< --out DIR: folder of the PNG files
+  std::string videoPath;                ///< --video FILE.mp4: the rendered frames as a video (ffmpeg)
   int width = 1280;                     ///< --width W [px], in [16, 8192]
   int height = 720;                     ///< --height H [px], in [16, 8192]
   std::string view = "fluid";           ///< --view fluid | particles

@@ -23,7 +23,9 @@
 #include "render/camera.h"
 #include "render/fluid_renderer.h"
 #include "render/image.h"
+#include "render/render_error.h"
 #include "render/shader_program.h"
+#include "render/video_writer.h"
 #include "sim/splash.h"
 
 namespace fp::engine {
@@ -64,6 +66,10 @@ struct DesktopPlatform::Impl {
   std::unique_ptr<render::FluidRenderer> renderer;
   render::OrbitCamera camera;
   sim::SplashGenerator splash;
+  // the state the splash was generated from: a paused simulation keeps its splash, not one a frame
+  const sim::Simulation* splashOf = nullptr;
+  std::uint64_t splashStep = ~0ull;
+  double splashTime = -1.0;
   PanelState panel;
   FrameTiming timing;
   std::optional<Clock::time_point> lastFrame;
@@ -87,6 +93,9 @@ struct DesktopPlatform::Impl {
   bool screenshotWritten = false;
   std::string recordDir;
   int recorded = 0;
+  std::unique_ptr<render::VideoWriter> video;  // the record-video toggle (F8)
+  int videoSize[2] = {0, 0};
+  int videos = 0;
   int screenshots = 0;
 
   void toggleFullscreen(bool on);
@@ -177,6 +186,9 @@ void DesktopPlatform::Impl::handleKey(AppSession& session, int key) {
           panel.message = e.what();
         }
       }
+      break;
+    case GLFW_KEY_F8:
+      panel.recordVideo = !panel.recordVideo;
       break;
     case GLFW_KEY_F9:
       panel.recordFrames = !panel.recordFrames;
@@ -418,14 +430,21 @@ void DesktopPlatform::capture(AppSession& session, int frame) {
   }
   render::SpraySpan spray;
   if (m->renderer->settings().showSpray) {
-    const sim::SplashParticles& s = m->splash.generate(simulation, std::uint64_t(frame));
+    if (m->splashOf != &simulation || m->splashStep != simulation.stepCount() ||
+        m->splashTime != simulation.time()) {
+      m->splash.generate(simulation, std::uint64_t(frame));
+      m->splashOf = &simulation;
+      m->splashStep = simulation.stepCount();
+      m->splashTime = simulation.time();
+    }
+    const sim::SplashParticles& s = m->splash.splash();
     spray = render::SpraySpan{s.x.data(), s.radius.data(), s.size()};
   }
   m->renderer->update(render::frameDataOf(simulation, spray));
   m->timing.capture = msSince(start);
 }
 
-void DesktopPlatform::draw(AppSession&, int frame) {
+void DesktopPlatform::draw(AppSession& session, int frame) {
   auto start = Clock::now();
   int fbw = 1, fbh = 1;
   glfwGetFramebufferSize(m->window, &fbw, &fbh);
@@ -448,6 +467,35 @@ void DesktopPlatform::draw(AppSession&, int frame) {
     std::snprintf(name, sizeof(name), "frame_%05d.png", m->recorded++);
     render::writePng((std::filesystem::path(m->recordDir) / name).string(),
                      render::readFramebuffer(0, 0, 0, fbw, fbh));
+  }
+  if (m->panel.recordVideo && fbw > 0) {
+    try {
+      if (m->video && (m->video->framesWritten() > 0 && (fbw != m->videoSize[0] || fbh != m->videoSize[1])))
+        m->video.reset();  // a resized window starts a new file
+      if (!m->video) {
+        char name[32];
+        std::snprintf(name, sizeof(name), "video_%03d.mp4", m->videos++);
+        m->video =
+            std::make_unique<render::VideoWriter>(name, fbw, fbh, session.simulation().scene().frameRate);
+        m->videoSize[0] = fbw;
+        m->videoSize[1] = fbh;
+        m->panel.message = std::string("recording video to ") + name + " (F8 stops)";
+      }
+      m->video->write(render::readFramebuffer(0, 0, 0, fbw, fbh));
+    } catch (const render::RenderError& e) {
+      m->panel.message = e.what();
+      m->panel.recordVideo = false;
+      m->video.reset();
+    }
+  } else if (m->video) {
+    const std::string written = m->video->path();
+    try {
+      m->video->close();
+      m->panel.message = "video written to " + written;
+    } catch (const render::RenderError& e) {
+      m->panel.message = e.what();
+    }
+    m->video.reset();
   }
   const double beforeUi = msSince(start);
   const auto ui = Clock::now();

@@ -7,7 +7,9 @@
 #include "render/fluid_renderer.h"
 #include "render/image.h"
 #include "render/offscreen_context.h"
+#include "render/render_error.h"
 #include "render/shader_program.h"
+#include "render/video_writer.h"
 
 namespace fp::engine {
 
@@ -30,12 +32,21 @@ Eigen::AlignedBox3f sceneViewBox(const sim::Simulation& simulation) {
 }
 
 HeadlessRender::HeadlessRender(const CliOptions& options)
-    : m_outDir(options.outDir), m_width(options.width), m_height(options.height) {
+    : m_outDir(options.outDir),
+      m_videoPath(options.videoPath),
+      m_width(options.width),
+      m_height(options.height) {
   std::error_code ec;
-  std::filesystem::create_directories(m_outDir, ec);
-  if (ec || !std::filesystem::is_directory(m_outDir))
-    throw sim::InputError(m_outDir + ": cannot create the image directory" +
-                          (ec ? " (" + ec.message() + ")" : ""));
+  if (!m_outDir.empty()) {
+    std::filesystem::create_directories(m_outDir, ec);
+    if (ec || !std::filesystem::is_directory(m_outDir))
+      throw sim::InputError(m_outDir + ": cannot create the image directory" +
+                            (ec ? " (" + ec.message() + ")" : ""));
+  }
+  // ffmpeg missing is an error before any simulation; the video starts with the first frame (its rate)
+  if (!m_videoPath.empty() && render::VideoWriter::findFfmpeg().empty())
+    throw render::RenderError("cannot write video " + m_videoPath +
+                              ": the ffmpeg program is not on PATH (apt install ffmpeg)");
   m_context = std::make_unique<render::OffscreenContext>(m_width, m_height);
   m_renderer = std::make_unique<render::FluidRenderer>(options.shaderDir.empty() ? render::defaultShaderDir()
                                                                                  : options.shaderDir);
@@ -43,6 +54,11 @@ HeadlessRender::HeadlessRender(const CliOptions& options)
 }
 
 HeadlessRender::~HeadlessRender() = default;
+
+void HeadlessRender::finish() {
+  if (m_video)
+    m_video->close();
+}
 
 const std::string& HeadlessRender::contextDescription() const {
   return m_context->description();
@@ -68,10 +84,18 @@ void HeadlessRender::renderFrame(int frame, const sim::Simulation& simulation,
   target.width = m_width;
   target.height = m_height;
   m_renderer->renderView(m_camera.view(), m_camera.projection(aspect), target);
-  char name[32];
-  std::snprintf(name, sizeof(name), "frame_%05d.png", frame);
-  render::writePng((std::filesystem::path(m_outDir) / name).string(),
-                   render::readFramebuffer(0, 0, 0, m_width, m_height));
+  const render::Image image = render::readFramebuffer(0, 0, 0, m_width, m_height);
+  if (!m_outDir.empty()) {
+    char name[32];
+    std::snprintf(name, sizeof(name), "frame_%05d.png", frame);
+    render::writePng((std::filesystem::path(m_outDir) / name).string(), image);
+  }
+  if (!m_videoPath.empty()) {
+    if (!m_video)
+      m_video =
+          std::make_unique<render::VideoWriter>(m_videoPath, m_width, m_height, simulation.scene().frameRate);
+    m_video->write(image);
+  }
   ++m_written;
   m_totalMs += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }

@@ -14,11 +14,13 @@
 namespace fp::render {
 class OffscreenContext;
 class FluidRenderer;
+class VideoWriter;
 }  // namespace fp::render
 
 namespace fp::engine {
 
-/// Renders frames of a simulation to `DIR/frame_NNNNN.png`.
+/// Renders frames of a simulation to `DIR/frame_NNNNN.png` and, with --video, to a video at the scene's frame
+/// rate.
 class HeadlessRender {
  public:
   /// Creates the output folder, the GL context and the renderer with the options' size, view and shaders.
@@ -34,6 +36,9 @@ class HeadlessRender {
   /// simulation with frame index `frame`; nothing is generated or drawn when the spray is hidden.
   void renderFrame(int frame, const sim::Simulation& simulation,
                    const sim::SplashParticles* splash = nullptr);
+
+  /// Finishes the video of --video (waits for ffmpeg); throws render::RenderError when it failed.
+  void finish();
 
   /// "OSMesa, 4.5 (Core Profile) Mesa 22.3.6, llvmpipe (...)"
   const std::string& contextDescription() const;
@@ -51,7 +56,9 @@ class HeadlessRender {
   sim::SplashGenerator m_splash;
   std::size_t m_sprayCount = 0;
   bool m_framed = false;
-  std::string m_outDir;
+  std::string m_outDir;     // PNG frames, or "" for none
+  std::string m_videoPath;  // --video, or ""
+  std::unique_ptr<render::VideoWriter> m_video;
   int m_width = 0;
   int m_height = 0;
   int m_written = 0;

@@ -48,7 +48,8 @@ int runHeadlessMode(const CliOptions& options) {
     render = std::make_unique<HeadlessRender>(options);
     if (!options.quiet) {
       std::cout << "rendering " << options.width << "x" << options.height << " " << options.view
-                << " view into " << options.outDir << " (" << render->contextDescription() << ")\n";
+                << " view into " << (options.outDir.empty() ? options.videoPath : options.outDir) << " ("
+                << render->contextDescription() << ")\n";
     }
     onFrame = [&render](int frame, const fp::sim::Simulation& simulation,
                         const fp::sim::SplashParticles& splash) {
@@ -60,6 +61,9 @@ int runHeadlessMode(const CliOptions& options) {
   if (!options.handScript.empty())
     std::cout << "momentum             " << summary.momentumFinal.transpose() << " kg m/s\n";
   if (render) {
+    render->finish();
+    if (!options.videoPath.empty())
+      std::cout << "video                " << options.videoPath << "\n";
     std::cout << "images               " << render->imagesWritten() << " (" << render->meanMilliseconds()
               << " ms each)\n";
   }

@@ -149,6 +149,8 @@ void runControls(AppSession& session, PanelState& state) {
   ImGui::SameLine();
   ImGui::Checkbox("record frames (F9)", &state.recordFrames);
   ImGui::SameLine();
+  ImGui::Checkbox("record video (F8)", &state.recordVideo);
+  ImGui::SameLine();
   ImGui::Checkbox("fullscreen (F11)", &state.fullscreen);
   if (!session.error().empty())
     ImGui::TextColored(ImVec4(1, 0.4f, 0.3f, 1), "%s (R resets)", session.error().c_str());
@@ -324,7 +326,7 @@ const std::vector<std::pair<const char*, const char*>>& controls() {
       {"+ / -", "time scale up / down"},
       {"V", "water or particle view"},
       {"F5 / F6", "record the hand / replay the recording"},
-      {"F9 / F12", "record frames as PNG / screenshot"},
+      {"F8 / F9 / F12", "record a video (ffmpeg) / frames as PNG / screenshot"},
       {"F11", "fullscreen"},
       {"Tab / F1, H", "panel / this help"},
       {"Esc", "close the help; Ctrl+Q quits"},

@@ -22,6 +22,7 @@ struct PanelState {
   std::string message;                               ///< one status line (saved files, errors)
   bool screenshot = false;                           ///< set by the button: write a screenshot this frame
   bool recordFrames = false;                         ///< write every frame's view as PNG
+  bool recordVideo = false;                          ///< write every frame's view into video_NNN.mp4
   bool fullscreen = false;                           ///< toggled by the button or F11
   std::vector<std::string> scenes;                   ///< scene files for the selector
 };

@@ -89,9 +89,11 @@ class FluidRenderer {
   const PassTimes& passTimes() const { return m_times; }
   /// particles uploaded by the last update()
   std::size_t particleCount() const;
+  /// The filtered eye depth of the water drawn by the last fluid-view renderView [m], 0 where there is none:
+  /// width * height values, rows from the bottom (for the image tests and tools; stalls the pipeline).
+  std::vector<float> readSurfaceDepth() const;
 
  private:
-  void drawLegend();
   struct Impl;
   std::unique_ptr<Impl> m_impl;
   RenderSettings m_settings;

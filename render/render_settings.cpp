@@ -26,11 +26,11 @@ RenderSettingsTable::RenderSettingsTable() : sim::ParamTableOf<RenderSettings>("
   add("filter_iterations", "water", "-", 0, 10, true,
       "narrow-range filter passes (each horizontal + vertical)", &R::filterIterations, 2);
   add("filter_radius", "water", "r", 0.1, 20.0, true, "filter half-width in fine particle radii",
-      &R::filterRadius, 3.0f);
+      &R::filterRadius, 4.0f);
   add("filter_max_pixels", "water", "px", 1.0, 256.0, true, "cap on the filter half-width",
-      &R::filterMaxPixels, 16.0f);
+      &R::filterMaxPixels, 64.0f);
   add("filter_range", "water", "r", 0.1, 20.0, true, "depth range kept by the filter in fine particle radii",
-      &R::filterRange, 3.0f);
+      &R::filterRange, 15.0f);
   add("refraction", "water", "-", 0.0, 1.0, true,
       "screen-space refraction offset at full thickness (view units)", &R::refraction, 0.04f);
 }

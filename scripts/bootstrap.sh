@@ -158,11 +158,19 @@ run_demo() {
     echo "the window did not run; rendering the headless demo instead"
   fi
   # No display: the same scene and app loop headless, a recorded hand pushing the water, rendered through OSMesa.
+  # With the ffmpeg program there, the frames also go into out/demo.mp4.
+  local video=()
+  if command -v ffmpeg > /dev/null; then
+    video=(--video out/demo.mp4)
+  fi
   ./build/fluidplaying --headless --render --scene assets/scenes/hand_tank.json --hand-script assets/hands/push.csv \
-    --frames 120 --width 960 --height 540 --out out/demo_frames --stats out/demo_stats.json
+    --frames 120 --width 960 --height 540 --out out/demo_frames --stats out/demo_stats.json "${video[@]}"
   echo
-  echo "demo output: PNG frames in out/demo_frames/, statistics in out/demo_stats.json"
-  echo "(make a video: ffmpeg -framerate 60 -i out/demo_frames/frame_%05d.png out/demo.mp4)"
+  if [[ ${#video[@]} -gt 0 ]]; then
+    echo "demo output: out/demo.mp4, PNG frames in out/demo_frames/, statistics in out/demo_stats.json"
+  else
+    echo "demo output: PNG frames in out/demo_frames/, statistics in out/demo_stats.json (no ffmpeg: no out/demo.mp4)"
+  fi
 }
 
 install_packages

@@ -1,16 +1,21 @@
 #version 330 core
-// One direction of the narrow-range depth filter (Truong and Yuksel 2018): a Gaussian over samples within a
-// depth range around the centre. Samples far in front belong to another sheet and are skipped; samples far
-// behind are clamped to the range; background samples are skipped, so silhouettes stay where they are.
-// The filter is as wide as a few radii of the centre's particle, so fine and coarse particles are smoothed at
-// their own scale.
+// One direction of the depth filter: a narrow-range filter (after Truong and Yuksel 2018) taken over mirrored
+// pairs of samples in inverse depth. For a plane, 1/z is linear across the screen, so the mean of the samples
+// at +i and -i equals the centre's and a plane stays a plane at any slope, however grazing the view; the
+// one-sided range test of the original filter bends planes seen at grazing angles. A pair whose mean lies far
+// in front of the centre belongs to another sheet and is skipped, one far behind is clamped to the range, a
+// pair with a background sample is skipped: silhouettes stay where they are.
+// The width is set by the finest particle radius in world space, the same for fine and coarse particles, so
+// the surface has one smoothing scale where resolutions meet.
 in vec2 vUv;
-uniform sampler2D uDepth;   // RG: eye depth [m] (0: no fluid), particle radius [m]
-uniform ivec2 uDirection;   // (1, 0) or (0, 1)
+uniform sampler2D uDepth;       // RG: eye depth [m] (0: no fluid), particle radius [m]
+uniform ivec2 uDirection;       // (1, 0) or (0, 1)
 uniform float uPixelsPerMetre;  // at eye depth 1 m
-uniform float uRadius;      // half-width in particle radii
-uniform float uMaxPixels;   // cap on the half-width
-uniform float uRange;       // kept depth range in particle radii
+uniform float uRadius;          // half-width in fine particle radii
+uniform float uFineRadius;      // [m]
+uniform float uMaxPixels;       // cap on the half-width
+uniform float uRange;           // kept depth range in fine particle radii
+uniform int uMaxTaps;           // most sample pairs a pixel
 out vec2 fDepth;
 
 void main() {
@@ -21,19 +26,29 @@ void main() {
     fDepth = c;
     return;
   }
-  float halfWidth = min(uMaxPixels, uRadius * c.y * uPixelsPerMetre / c.x);
-  int n = int(ceil(halfWidth));
+  float halfWidth = min(uMaxPixels, uRadius * uFineRadius * uPixelsPerMetre / c.x);
+  // at most uMaxTaps pairs: a wide filter samples every stride-th pixel (the next pass smooths the rest)
+  int n = min(int(ceil(halfWidth)), uMaxTaps);
+  float stride = max(halfWidth / float(n), 1.0);
   float sigma = max(0.5 * halfWidth, 0.5);
-  float range = uRange * c.y;
+  float w0 = 1.0 / c.x;
+  // the range in inverse depth: d(1/z) = dz / z^2
+  float range = uRange * uFineRadius * w0 * w0;
   float sum = 0.0;
-  float weights = 0.0;
-  for (int i = -n; i <= n; ++i) {
-    float z = texelFetch(uDepth, clamp(p + i * uDirection, ivec2(0), last), 0).x;
-    if (z <= 0.0 || z < c.x - range) continue;
-    z = min(z, c.x + range);
-    float w = exp(-float(i * i) / (2.0 * sigma * sigma));
-    sum += w * z;
-    weights += w;
+  float weights = 1.0;
+  for (int i = 1; i <= n; ++i) {
+    float x = floor(float(i) * stride + 0.5);
+    ivec2 o = int(x) * uDirection;
+    float za = texelFetch(uDepth, clamp(p + o, ivec2(0), last), 0).x;
+    float zb = texelFetch(uDepth, clamp(p - o, ivec2(0), last), 0).x;
+    if (za <= 0.0 || zb <= 0.0) continue;
+    // deviation of the pair's mean from the centre, in inverse depth (> 0: in front)
+    float d = 0.5 * (1.0 / za + 1.0 / zb) - w0;
+    if (d > range) continue;
+    d = max(d, -range);
+    float w = exp(-x * x / (2.0 * sigma * sigma));
+    sum += 2.0 * w * d;
+    weights += 2.0 * w;
   }
-  fDepth = vec2(sum / weights, c.y);
+  fDepth = vec2(1.0 / (w0 + sum / weights), c.y);
 }

@@ -8,7 +8,7 @@ uniform mat4 uView;
 uniform mat4 uProj;
 uniform vec2 uViewport;       // size of the pass's viewport [px]
 uniform float uMaxPointSize;  // the context's largest point size [px]
-uniform float uRadiusScale;
+uniform float uSpriteScale;  // sprites this much larger than the sphere (room for the glass it wets)
 uniform float uHighlightDuration;  // <= 0: no highlight
 flat out vec3 vCenter;
 flat out float vRadius;
@@ -17,7 +17,7 @@ flat out float vValue;
 
 void main() {
   vCenter = (uView * vec4(aCenter, 1.0)).xyz;
-  vRadius = aRadius * uRadiusScale;
+  vRadius = aRadius;
   bool fresh = uHighlightDuration > 0.0 && aSplitAge >= 0.0 && aSplitAge < uHighlightDuration;
   vHighlight = fresh ? 1.0 - aSplitAge / uHighlightDuration : 0.0;
   vValue = aValue;
@@ -28,5 +28,5 @@ void main() {
   float z = max(-vCenter.z, 1e-6);
   float stretch = min(length(vCenter) / z, 2.0);
   float diameter = 2.0 * vRadius * uProj[1][1] * 0.5 * uViewport.y / z;
-  gl_PointSize = clamp(1.1 * stretch * diameter + 2.0, 1.0, uMaxPointSize);
+  gl_PointSize = clamp(1.1 * uSpriteScale * stretch * diameter + 2.0, 1.0, uMaxPointSize);
 }

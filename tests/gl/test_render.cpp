@@ -18,6 +18,7 @@
 #include "render/offscreen_context.h"
 #include "render/render_error.h"
 #include "render/shader_program.h"
+#include "render/video_writer.h"
 #include "synthetic_scene.h"
 
 using namespace fp;
@@ -251,23 +252,61 @@ TEST_F(GlRenderTest, FreshSplitChildrenAreRedOnlyWithTheHighlightOn) {
   EXPECT_EQ(countRed(draw(s.frame()), left), 0u);
 }
 
-TEST_F(GlRenderTest, SprayAddsPixelsOnlyWhenOn) {
+TEST_F(GlRenderTest, SprayIsDropletsAndFoamOnlyWhenOn) {
   test::SyntheticScene s = blockScene();
   frame(s);
   const render::Image without = draw(s.frame(false));
   addSpray(s);
   renderer().settings().showSpray = true;
   const render::Image with = draw(s.frame());
-  const std::vector<Eigen::Vector2i> spray = changedPixels(with, without, 12);
+  const std::vector<Eigen::Vector2i> spray = changedPixels(with, without, 6);
   EXPECT_GE(spray.size(), 40u);
-  // spray pixels are bright and lie above the water, right of the block
-  std::size_t bright = 0;
-  for (const auto& p : spray)
-    bright += with.at(p.x(), p.y())[0] >= 180 && with.at(p.x(), p.y())[2] >= 180;
-  EXPECT_GE(double(bright), 0.5 * double(spray.size()));
+  // droplets in the air are clear, not white dots: few of their pixels are near white
+  std::size_t white = 0;
+  for (const auto& p : spray) {
+    const std::uint8_t* c = with.at(p.x(), p.y());
+    white += c[0] >= 235 && c[1] >= 235 && c[2] >= 235;
+  }
+  EXPECT_LE(double(white), 0.1 * double(spray.size()));
+
+  // foam: droplets lying on the water are whiter than the water under them
+  test::SyntheticScene foam = blockScene();
+  for (int i = 0; i < 10; ++i) {
+    for (int k = 0; k < 10; ++k) {
+      foam.sprayPositions.emplace_back(-0.22f + 0.024f * float(i), 0.2f, -0.12f + 0.024f * float(k));
+      foam.sprayRadii.push_back(0.006f);
+    }
+  }
+  const render::Image water = draw(foam.frame(false));
+  const render::Image foamy = draw(foam.frame());
+  const std::vector<Eigen::Vector2i> foamPixels = changedPixels(foamy, water, 6);
+  ASSERT_GE(foamPixels.size(), 40u);
+  double brighter = 0;
+  for (const auto& p : foamPixels) {
+    for (int c = 0; c < 3; ++c)
+      brighter += double(foamy.at(p.x(), p.y())[c]) - double(water.at(p.x(), p.y())[c]);
+  }
+  EXPECT_GE(brighter / (3.0 * double(foamPixels.size())), 10.0);
 
   renderer().settings().showSpray = false;
   EXPECT_EQ(changedPixels(draw(s.frame()), without, 0).size(), 0u);
+}
+
+TEST_F(GlRenderTest, ParticleViewDrawsSprayGreen) {
+  test::SyntheticScene s = blockScene();
+  frame(s);
+  renderer().settings().view = render::RenderSettings::View::Particles;
+  const render::Image without = draw(s.frame(false));
+  addSpray(s);
+  const render::Image with = draw(s.frame());
+  const std::vector<Eigen::Vector2i> spray = changedPixels(with, without, 12);
+  ASSERT_GE(spray.size(), 40u);
+  std::size_t green = 0;
+  for (const auto& p : spray) {
+    const std::uint8_t* c = with.at(p.x(), p.y());
+    green += c[1] >= 60 && c[1] >= 2 * c[0] && c[1] >= 2 * c[2];
+  }
+  EXPECT_GE(double(green), 0.8 * double(spray.size()));
 }
 
 TEST_F(GlRenderTest, ParticleViewColoursByTheFieldAndDrawsALegend) {
@@ -297,6 +336,22 @@ TEST_F(GlRenderTest, ParticleViewColoursByTheFieldAndDrawsALegend) {
   EXPECT_GE(purple, 5u);   // the bottom layer, seen from the side
   EXPECT_GE(legendPurple, 10u);
   EXPECT_GE(legendYellow, 10u);
+  // the legend sits in the bottom-right corner, away from the window's panel (top left): its bar reaches the
+  // right edge and none of it is in the top half
+  std::size_t top = 0, legendPixels = 0;
+  int right = 0;
+  for (int y = 0; y < kHeight; ++y) {
+    for (int x = 0; x < kWidth; ++x) {
+      if (!isPurple(legendOnly.at(x, y)) && !isYellow(legendOnly.at(x, y)))
+        continue;
+      ++legendPixels;
+      top += y < kHeight / 2;
+      right = std::max(right, x);
+    }
+  }
+  EXPECT_GE(legendPixels, 20u);
+  EXPECT_EQ(top, 0u);
+  EXPECT_GE(right, kWidth - 24);
 }
 
 TEST_F(GlRenderTest, CollidersAreDrawn) {
@@ -421,4 +476,21 @@ TEST(HeadlessRenderTest, ADamBreakFrameWithSplashHasSprayPixels) {
   const auto [disabled, disabledCount] = renderTo("fp_headless_spray_disabled", false);
   EXPECT_EQ(disabledCount, 0u);
   EXPECT_EQ(changedPixels(disabled, without, 0).size(), 0u);
+}
+
+TEST(HeadlessRenderTest, WritesAVideoAtTheSceneFrameRate) {
+  if (render::VideoWriter::findFfmpeg().empty())
+    GTEST_SKIP() << "ffmpeg is not on PATH: no video to write";
+  const fs::path video = fs::path(::testing::TempDir()) / "fp_headless.mp4";
+  fs::remove(video);
+  const std::string scene = std::string(FP_SOURCE_DIR) + "/assets/scenes/tiny_dam_break.json";
+  const int status =
+      std::system(("env -u DISPLAY " + std::string(FP_FLUIDPLAYING_EXE) +
+                   " --headless --render --quiet --threads 1 --scene " + scene +
+                   " --frames 3 --width 96 --height 64 --video " + video.string() + " > /dev/null 2>&1")
+                      .c_str());
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0);
+  ASSERT_TRUE(fs::exists(video));
+  EXPECT_GT(fs::file_size(video), 0u);
 }

@@ -1,0 +1,95 @@
+// The video writer (label gl, beside the image tests): a few frames through the ffmpeg program, checked
+// with ffprobe when it is there; a one-line error when ffmpeg is not on PATH.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+
+#include "render/render_error.h"
+#include "render/video_writer.h"
+
+using namespace fp;
+namespace fs = std::filesystem;
+
+namespace {
+
+render::Image gradient(int width, int height, int frame) {
+  render::Image image;
+  image.width = width;
+  image.height = height;
+  image.rgba.resize(std::size_t(width) * height * 4);
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      std::uint8_t* p = &image.rgba[(std::size_t(y) * width + x) * 4];
+      p[0] = std::uint8_t(4 * x + 20 * frame);
+      p[1] = std::uint8_t(4 * y);
+      p[2] = 128;
+      p[3] = 255;
+    }
+  }
+  return image;
+}
+
+std::string run(const std::string& command) {
+  std::string out;
+  if (FILE* pipe = popen(command.c_str(), "r")) {
+    char buffer[256];
+    while (std::fgets(buffer, sizeof(buffer), pipe))
+      out += buffer;
+    pclose(pipe);
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST(VideoWriterTest, WritesAReadableVideoOfTheFrames) {
+  if (render::VideoWriter::findFfmpeg().empty())
+    GTEST_SKIP() << "ffmpeg is not on PATH: no video to write";
+  const fs::path file = fs::path(::testing::TempDir()) / "fp_video_test.mp4";
+  fs::remove(file);
+  {
+    render::VideoWriter video(file.string(), 64, 48, 60.0);
+    for (int f = 0; f < 6; ++f)
+      video.write(gradient(64, 48, f));
+    EXPECT_EQ(video.framesWritten(), 6);
+    video.close();
+  }
+  ASSERT_TRUE(fs::exists(file));
+  EXPECT_GT(fs::file_size(file), 0u);
+  if (run("command -v ffprobe").empty())
+    GTEST_SKIP() << "ffprobe is not on PATH: frame count and size not checked";
+  const std::string probe =
+      run("ffprobe -v error -count_frames -select_streams v:0 -show_entries "
+          "stream=nb_read_frames,width,height,r_frame_rate -of csv=p=0 '" +
+          file.string() + "'");
+  EXPECT_NE(probe.find("64,48,60/1,6"), std::string::npos) << probe;
+}
+
+TEST(VideoWriterTest, AFrameOfAnotherSizeIsAnError) {
+  if (render::VideoWriter::findFfmpeg().empty())
+    GTEST_SKIP() << "ffmpeg is not on PATH";
+  const fs::path file = fs::path(::testing::TempDir()) / "fp_video_size.mp4";
+  render::VideoWriter video(file.string(), 64, 48, 30.0);
+  EXPECT_THROW(video.write(gradient(32, 48, 0)), render::RenderError);
+}
+
+TEST(VideoWriterTest, MissingFfmpegIsAOneLineError) {
+  const char* path = std::getenv("PATH");
+  const std::string saved = path ? path : "";
+  const fs::path empty = fs::path(::testing::TempDir()) / "fp_empty_path";
+  fs::create_directories(empty);
+  setenv("PATH", empty.c_str(), 1);
+  try {
+    render::VideoWriter video((empty / "x.mp4").string(), 64, 48, 30.0);
+    setenv("PATH", saved.c_str(), 1);
+    FAIL() << "no error without ffmpeg";
+  } catch (const render::RenderError& e) {
+    setenv("PATH", saved.c_str(), 1);
+    const std::string message = e.what();
+    EXPECT_NE(message.find("ffmpeg"), std::string::npos) << message;
+    EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+  }
+}

@@ -1,0 +1,99 @@
+// Image tests of how the water looks (issue 14, label gl), measured from the renderer's own buffers at
+// 640x360 through OSMesa: the resting hand tank at uniform-high and fluidplaying (states exported by the
+// simulation at frame 90, tests/gl/data) and a moving propeller frame of mixed resolution. The figures at
+// 1280x720 and their history are in docs/rendering.md (fp_water_look prints them).
+#include <gtest/gtest.h>
+
+#include <memory>
+
+#include "render/offscreen_context.h"
+#include "render/shader_program.h"
+#include "water_look_scenes.h"
+
+using namespace fp;
+
+namespace {
+
+constexpr int kWidth = 640;
+constexpr int kHeight = 360;
+
+// Tolerances. A resting surface: rms normal angle from the vertical at most 3 degrees (before this issue's
+// filter: 8.2 uniform-high, 22.9 fluidplaying), the rendered height within half a fine radius of the
+// simulated one, the surface drawn wherever it should be.
+constexpr double kMaxRestingNormalRms = 3.0;  // [deg]
+constexpr double kMaxHeightError = 0.5;       // [fine radii]
+constexpr double kMinRestingCoverage = 0.98;
+// Adaptive against uniform at rest, over the whole image: mean channel difference and the share of the
+// water's pixels differing by more than 24 levels (before: 0.94 levels and 2.6%).
+constexpr double kMaxImageMeanDifference = 2.0;  // [levels]
+constexpr double kMaxWaterFractionOver = 0.01;
+// Creases (seams, rings, blobs): the share of interior water pixels whose normal turns by more than 20
+// degrees over 2 pixels, in a moving frame of fine and coarse particles (before: 0.17).
+constexpr double kMaxMovingCreases = 0.03;
+
+class WaterLookTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    s_context = std::make_unique<render::OffscreenContext>(kWidth, kHeight);
+    s_renderer = std::make_unique<render::FluidRenderer>(render::defaultShaderDir());
+  }
+  static void TearDownTestSuite() {
+    s_renderer.reset();
+    s_context.reset();
+  }
+  void SetUp() override { s_renderer->settings() = render::RenderSettings(); }
+  static test::LookShot shoot(const test::LookScene& scene) {
+    return test::shoot(*s_renderer, scene, kWidth, kHeight);
+  }
+
+  static std::unique_ptr<render::OffscreenContext> s_context;
+  static std::unique_ptr<render::FluidRenderer> s_renderer;
+};
+
+std::unique_ptr<render::OffscreenContext> WaterLookTest::s_context;
+std::unique_ptr<render::FluidRenderer> WaterLookTest::s_renderer;
+
+}  // namespace
+
+TEST_F(WaterLookTest, ARestingTankIsFlatAtTheSimulatedHeightInEveryMode) {
+  for (bool adaptive : {false, true}) {
+    const test::LookScene scene = test::restingHandTank(adaptive);
+    const test::LookShot shot = shoot(scene);
+    const test::RestingSurface r = test::measureRestingSurface(shot.surface, scene.surfaceY, scene.inner);
+    SCOPED_TRACE(adaptive ? "fluidplaying" : "uniform-high");
+    ASSERT_GT(r.pixels, 5000u);
+    EXPECT_GE(r.coverage, kMinRestingCoverage);
+    EXPECT_LE(r.rmsNormalDegrees, kMaxRestingNormalRms);
+    EXPECT_LE(std::abs(r.meanHeightError) / scene.fineRadius, kMaxHeightError) << r.meanHeightError << " m";
+  }
+}
+
+TEST_F(WaterLookTest, AdaptiveWaterAtRestLooksLikeUniformWater) {
+  const test::LookShot uniform = shoot(test::restingHandTank(false));
+  const test::LookShot adaptive = shoot(test::restingHandTank(true));
+  const test::WaterDifference d =
+      test::compareWater(uniform.image, adaptive.image, uniform.depth, adaptive.depth, 24);
+  EXPECT_GT(d.waterPixels, 20000u);
+  EXPECT_LE(d.imageMeanLevels, kMaxImageMeanDifference);
+  EXPECT_LE(d.fractionOver, kMaxWaterFractionOver);
+}
+
+TEST_F(WaterLookTest, AMovingFrameOfMixedResolutionHasNoCreases) {
+  const test::LookScene scene = test::movingPropeller();
+  const test::LookShot shot = shoot(scene);
+  const test::Creases c = test::measureCreases(shot.surface, 2, 20.0f, scene.fineRadius);
+  EXPECT_GT(c.interior, 20000u);
+  EXPECT_LE(c.fraction, kMaxMovingCreases);
+}
+
+TEST_F(WaterLookTest, TheMetricsFailTheUnfilteredSurface) {
+  // the raw sphere impostors: the lattice and the coarse spheres show, and the metrics say so
+  s_renderer->settings().filterIterations = 0;
+  const test::LookScene rest = test::restingHandTank(false);
+  const test::LookShot shot = shoot(rest);
+  EXPECT_GT(test::measureRestingSurface(shot.surface, rest.surfaceY, rest.inner).rmsNormalDegrees,
+            3.0 * kMaxRestingNormalRms);
+  const test::LookScene moving = test::movingPropeller();
+  EXPECT_GT(test::measureCreases(shoot(moving).surface, 2, 20.0f, moving.fineRadius).fraction,
+            3.0 * kMaxMovingCreases);
+}
