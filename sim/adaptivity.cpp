@@ -79,7 +79,9 @@ double Adaptivity::splitError(const AdaptContext& ctx, std::size_t o, const std:
   const Real Vo = p.m[o] / rho0;
   const Real Vs = Vo / Real(children.size());
   const Real Ho = p.H[o];
-  const Real Hs = supportForMass(p.m[o] / Real(children.size()), ctx.mFine, Real(ctx.params.particleRadius));
+  // The error of the state the solver then simulates: a split gives its children the parent's support, which
+  // blends down to their own over the following steps (blendSupports).
+  const Real Hs = Ho;
   const Real Hb = ctx.boundary.support();
   double e = 0.0;
   // tau_j: the neighbours' density change
@@ -125,6 +127,23 @@ void Adaptivity::planSplit(const AdaptContext& ctx, SplitPlan& plan) const {
   }
   const double childRadius =
       ctx.params.particleRadius * std::cbrt(double(p.m[o]) / double(plan.n) / double(ctx.mFine));
+  // A signed distance is 1-Lipschitz outside the solid (where it is exact): a collider whose distance from
+  // the parent exceeds the farthest child offset by the clearance cannot hold a child of any orientation.
+  // One query per collider then replaces the K x n queries of the candidates, which for a mesh cost a pass
+  // over all its triangles each.
+  double reach = 0.0;
+  for (const Vec3d& offset : SplitTemplates::get().offsets(plan.n))
+    reach = std::max(reach, offset.norm());
+  reach *= ctx.params.particleRadius * std::cbrt(double(p.m[o]) / double(ctx.mFine));
+  const Vec3d xo = p.x[o].cast<double>();
+  near.erase(std::remove_if(near.begin(), near.end(),
+                            [&](std::uint16_t c) {
+                              const ColliderState& col = ctx.colliders[c];
+                              const Vec3d local = col.orientation.conjugate() * (xo - col.position);
+                              // float child positions may sit a rounding step closer than their offsets
+                              return signedDistanceLocal(col.desc, local) - reach >= 2.002 * childRadius;
+                            }),
+             near.end());
   auto valid = [&](const std::vector<Vec3>& children) {
     for (std::uint16_t c : near) {
       const ColliderState& col = ctx.colliders[c];
@@ -159,6 +178,8 @@ bool Adaptivity::transferMass(const AdaptContext& ctx, std::size_t donor, double
   const SimParams& params = ctx.params;
   m_candidates.clear();
   double capacity = 0.0;
+  // the transfer rate is per solver step: an adaptation every k steps may move k times as much
+  const double rate = params.transferRate * double(std::max(1, params.adaptationPeriod));
   for (std::uint32_t k = ctx.fluidNbrs.offsets[donor]; k < ctx.fluidNbrs.offsets[donor + 1]; ++k) {
     const std::uint32_t j = ctx.fluidNbrs.indices[k];
     if (m_locked[j] || m_removed[j])
@@ -169,9 +190,10 @@ bool Adaptivity::transferMass(const AdaptContext& ctx, std::size_t donor, double
     if (distance >= pairSupport(p.H[j], p.H[donor]))
       continue;
     m_candidates.emplace_back(distance, j);
-    capacity += std::min(double(p.mOpt[j]) - double(p.m[j]), params.transferRate * double(p.m[j]));
+    capacity += std::min(double(p.mOpt[j]) - double(p.m[j]), rate * double(p.m[j]));
   }
-  if (m_candidates.empty() || capacity <= 0.0 || (all && capacity < amount))
+  // (a merge whose receivers have room for all but round-off of the donor goes ahead: see below)
+  if (m_candidates.empty() || capacity <= 0.0 || (all && capacity < amount * (1.0 - 1e-9)))
     return false;
   // nearest receivers first, each filled up to its optimal mass
   std::sort(m_candidates.begin(), m_candidates.end());
@@ -179,6 +201,8 @@ bool Adaptivity::transferMass(const AdaptContext& ctx, std::size_t donor, double
   const double mDonor = p.m[donor];
   const Vec3d xDonor = p.x[donor].cast<double>();
   const Vec3d vDonor = p.v[donor].cast<double>();
+  constexpr std::uint32_t kNoReceiver = ~std::uint32_t(0);
+  std::uint32_t last = kNoReceiver;
   for (const auto& [distance, j] : m_candidates) {
     if (left <= 0.0)
       break;
@@ -187,12 +211,13 @@ bool Adaptivity::transferMass(const AdaptContext& ctx, std::size_t donor, double
     // merge thus spreads its donor over several receivers, or waits for a step where they have room. (Letting
     // donors shrink over several steps instead leaves tiny particles with lagging supports that get shot
     // out.)
-    const double room = std::min(double(p.mOpt[j]) - double(p.m[j]), params.transferRate * double(p.m[j]));
+    const double room = std::min(double(p.mOpt[j]) - double(p.m[j]), rate * double(p.m[j]));
     // a merge hands its last receiver the exact remainder, so no sliver of mass is left behind by round-off
     const double give = all && room >= left * (1.0 - 1e-9) ? left : std::min(room, left);
     if (give <= 0.0)
       continue;
     left -= give;
+    last = j;
     const double mj = p.m[j];
     const double total = mj + give;
     // The received mass brings its momentum. A merge also brings its position (the donor vanishes, its centre
@@ -203,6 +228,16 @@ bool Adaptivity::transferMass(const AdaptContext& ctx, std::size_t donor, double
     p.v[j] = ((mj * p.v[j].cast<double>() + give * vDonor) / total).cast<Real>();
     p.m[j] = Real(total);
     m_locked[j] = 1;
+  }
+  // Summing the rooms can fall short of the donor's mass by round-off although the capacity covered it: the
+  // last receiver then takes that remainder too, so no donor of ~1e-16 of its mass survives a merge.
+  if (all && left > 0.0 && left <= 1e-9 * amount && last != kNoReceiver) {
+    const double mj = p.m[last];
+    const double total = mj + left;
+    p.x[last] = ((mj * p.x[last].cast<double>() + left * xDonor) / total).cast<Real>();
+    p.v[last] = ((mj * p.v[last].cast<double>() + left * vDonor) / total).cast<Real>();
+    p.m[last] = Real(total);
+    left = 0.0;
   }
   const double given = amount - std::max(0.0, left);
   m_locked[donor] = 1;
@@ -223,8 +258,10 @@ AdaptivityStats Adaptivity::adapt(const AdaptContext& ctx, bool ignoreDelay) {
   m_removed.assign(n, 0);
 
   auto ratio = [&](std::size_t i) { return p.m[i] / p.mOpt[i]; };
+  // the split delay counts solver steps, whatever the adaptation period
+  const std::uint32_t period = std::uint32_t(std::max(1, params.adaptationPeriod));
   for (std::size_t i = 0; i < n; ++i)
-    p.heavySteps[i] = ratio(i) >= Real(params.splitAbove) ? p.heavySteps[i] + 1 : 0;
+    p.heavySteps[i] = ratio(i) >= Real(params.splitAbove) ? p.heavySteps[i] + period : 0;
 
   // merge n:(n-1): a too-light particle goes into its nearest light neighbours
   for (std::size_t i = 0; i < n; ++i) {

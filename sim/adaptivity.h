@@ -60,7 +60,8 @@ class Adaptivity {
   static void blendSupports(ParticleSet& p, const SimParams& params, Real mFine);
 
   /// Split error E (docs/method.md, Adaptivity) of placing the children of `o` at `children` (each of
-  /// mass m_o / n), with the neighbourhood of the context [-]
+  /// mass m_o / n and, as the split creates them, the parent's support), with the neighbourhood of the
+  /// context [-]
   static double splitError(const AdaptContext& ctx, std::size_t o, const std::vector<Vec3>& children);
 
   /// bytes held

@@ -45,6 +45,57 @@ Real supportForMass(Real m, Real mFine, Real fineRadius) {
   return Real(4) * fineRadius * std::cbrt(m / mFine);
 }
 
+namespace {
+
+/// The cone test of one particle (see detectSurface). `away` and `volume` are the volume-weighted sum of the
+/// directions away from its fluid neighbours and their volume, which the caller may gather in a loop it
+/// shares with other sums.
+bool isSurface(const ParticleSet& p, std::size_t i, Vec3 away, Real volume, const NeighborList& fluidNbrs,
+               const NeighborList& boundaryNbrs, const BoundarySet& boundary) {
+  const Vec3 xi = p.x[i];
+  // Boundary particles count with their (pair-scaled) volumes: a wall is not a free surface.
+  const Real sb = boundary.volumeScale(p.H[i]);
+  for (std::uint32_t k = boundaryNbrs.offsets[i]; k < boundaryNbrs.offsets[i + 1]; ++k) {
+    const std::uint32_t b = boundaryNbrs.indices[k];
+    const Vec3 d = xi - boundary.x[b];
+    const Real len = d.norm();
+    const Real vb = sb * boundary.psi[b];
+    volume += vb;
+    if (len > Real(0))
+      away += (vb / len) * d;
+  }
+  const std::uint32_t count = fluidNbrs.count(i) + boundaryNbrs.count(i);
+  if (count < kMinNeighbors)
+    return true;
+  const Real len = away.norm();
+  // a balanced neighbourhood is interior; at a flat free surface the imbalance is about one half
+  if (len <= kMinImbalance * volume)
+    return false;
+  const Vec3 dir = away / len;
+  auto inCone = [&](const Vec3& xj) {
+    const Vec3 d = xj - xi;
+    return d.dot(dir) >= kConeCos * d.norm();
+  };
+  for (std::uint32_t k = fluidNbrs.offsets[i]; k < fluidNbrs.offsets[i + 1]; ++k) {
+    if (inCone(p.x[fluidNbrs.indices[k]]))
+      return false;
+  }
+  for (std::uint32_t k = boundaryNbrs.offsets[i]; k < boundaryNbrs.offsets[i + 1]; ++k) {
+    if (inCone(boundary.x[boundaryNbrs.indices[k]]))
+      return false;
+  }
+  return true;
+}
+
+void setSurfaceFlag(ParticleSet& p, std::size_t i, bool surface) {
+  if (surface)
+    p.flags[i] |= kFlagSurface;
+  else
+    p.flags[i] &= ~std::uint32_t(kFlagSurface);
+}
+
+}  // namespace
+
 void detectSurface(ParticleSet& p, const NeighborList& fluidNbrs, const NeighborList& boundaryNbrs,
                    const BoundarySet& boundary) {
   const std::size_t n = p.size();
@@ -53,8 +104,7 @@ void detectSurface(ParticleSet& p, const NeighborList& fluidNbrs, const Neighbor
       const Vec3 xi = p.x[i];
       // Directions to the neighbours weighted by their volumes: with particles of different sizes an
       // unweighted sum points away from the many fine neighbours towards a few coarse ones and flags
-      // interfaces as surface. Boundary particles count with their (pair-scaled) volumes: a wall is not a
-      // free surface.
+      // interfaces as surface.
       Vec3 away = Vec3::Zero();
       Real volume = 0;
       for (std::uint32_t k = fluidNbrs.offsets[i]; k < fluidNbrs.offsets[i + 1]; ++k) {
@@ -66,85 +116,14 @@ void detectSurface(ParticleSet& p, const NeighborList& fluidNbrs, const Neighbor
         if (len > Real(0))
           away += (vj / len) * d;
       }
-      const Real sb = boundary.volumeScale(p.H[i]);
-      for (std::uint32_t k = boundaryNbrs.offsets[i]; k < boundaryNbrs.offsets[i + 1]; ++k) {
-        const std::uint32_t b = boundaryNbrs.indices[k];
-        const Vec3 d = xi - boundary.x[b];
-        const Real len = d.norm();
-        const Real vb = sb * boundary.psi[b];
-        volume += vb;
-        if (len > Real(0))
-          away += (vb / len) * d;
-      }
-      const std::uint32_t count = fluidNbrs.count(i) + boundaryNbrs.count(i);
-      bool surface = count < kMinNeighbors;
-      const Real len = away.norm();
-      // a balanced neighbourhood is interior; at a flat free surface the imbalance is about one half
-      if (!surface && len > kMinImbalance * volume) {
-        const Vec3 dir = away / len;
-        bool covered = false;
-        auto inCone = [&](const Vec3& xj) {
-          const Vec3 d = xj - xi;
-          return d.dot(dir) >= kConeCos * d.norm();
-        };
-        for (std::uint32_t k = fluidNbrs.offsets[i]; k < fluidNbrs.offsets[i + 1] && !covered; ++k)
-          covered = inCone(p.x[fluidNbrs.indices[k]]);
-        for (std::uint32_t k = boundaryNbrs.offsets[i]; k < boundaryNbrs.offsets[i + 1] && !covered; ++k)
-          covered = inCone(boundary.x[boundaryNbrs.indices[k]]);
-        surface = !covered;
-      }
-      if (surface)
-        p.flags[i] |= kFlagSurface;
-      else
-        p.flags[i] &= ~std::uint32_t(kFlagSurface);
+      setSurfaceFlag(p, i, isSurface(p, i, away, volume, fluidNbrs, boundaryNbrs, boundary));
     }
   });
 }
 
-void LevelEstimator::propagateDistance(ParticleSet& p, const NeighborList& fluidNbrs, Real cap, Real hop) {
-  const std::size_t n = p.size();
-  m_phiNext.resize(n);
-  // phi is kept from step to step (it moves with the particles and children inherit it), so a couple of
-  // Jacobi passes of phi_i = min_j (phi_j + |x_ij|) per step follow the moving surface: distances may shrink
-  // by two hops and grow by one hop per step. A particle without a previous value (infinity) starts at the
-  // cap, and the first call runs to convergence.
-  bool fresh = false;
-  for (std::size_t i = 0; i < n; ++i) {
-    if (p.flags[i] & kFlagSurface) {
-      p.phi[i] = 0;
-    } else if (!(p.phi[i] < cap)) {
-      fresh |= !std::isfinite(p.phi[i]);
-      p.phi[i] = cap;
-    } else {
-      p.phi[i] = std::min(cap, p.phi[i] + hop);
-    }
-  }
-  const int passes = fresh ? std::min(kMaxPropagationPasses, int(std::ceil(cap / hop)) + 1) : kPassesPerStep;
-  for (int pass = 0; pass < passes; ++pass) {
-    std::atomic<bool> changed{false};
-    tbb::parallel_for(Range(0, n, kGrain), [&](const Range& r) {
-      bool local = false;
-      for (std::size_t i = r.begin(); i < r.end(); ++i) {
-        Real best = p.phi[i];
-        for (std::uint32_t k = fluidNbrs.offsets[i]; k < fluidNbrs.offsets[i + 1]; ++k) {
-          const std::uint32_t j = fluidNbrs.indices[k];
-          if (p.phi[j] >= best)
-            continue;  // cannot improve
-          best = std::min(best, p.phi[j] + (p.x[i] - p.x[j]).norm());
-        }
-        local |= best != p.phi[i];
-        m_phiNext[i] = best;
-      }
-      if (local)
-        changed = true;
-    });
-    p.phi.swap(m_phiNext);
-    if (!changed)
-      break;
-  }
-}
-
-void LevelEstimator::vorticityAndVelocityDifference(ParticleSet& p, const NeighborList& fluidNbrs) {
+void LevelEstimator::surfaceAndRawDynamics(ParticleSet& p, const NeighborList& fluidNbrs,
+                                           const NeighborList& boundaryNbrs, const BoundarySet& boundary) {
+  // One pass over the neighbours for the surface test, the raw SPH curl and the raw velocity difference.
   const std::size_t n = p.size();
   m_rawOmega.resize(n);
   m_rawNu.resize(n);
@@ -152,6 +131,8 @@ void LevelEstimator::vorticityAndVelocityDifference(ParticleSet& p, const Neighb
     for (std::size_t i = r.begin(); i < r.end(); ++i) {
       const Vec3 xi = p.x[i];
       const Vec3 vi = p.v[i];
+      Vec3 away = Vec3::Zero();
+      Real volume = 0;
       Vec3 curl = Vec3::Zero();
       // the particle itself is in the denominator of nu (weight W(0)), so an isolated particle has nu = 0
       Real num = 0;
@@ -159,41 +140,99 @@ void LevelEstimator::vorticityAndVelocityDifference(ParticleSet& p, const Neighb
       for (std::uint32_t k = fluidNbrs.offsets[i]; k < fluidNbrs.offsets[i + 1]; ++k) {
         const std::uint32_t j = fluidNbrs.indices[k];
         const Vec3 xij = xi - p.x[j];
-        const Real Hij = pairSupport(p.H[i], p.H[j]);
+        const Real len = xij.norm();
+        const Real vj = p.m[j] / p.rho[j];
+        volume += vj;
+        if (len > Real(0))
+          away += (vj / len) * xij;
         Real w = 0;
         Real g = 0;
-        CubicSpline::evaluate(xij.norm(), Hij, w, g);
+        CubicSpline::evaluate(len, pairSupport(p.H[i], p.H[j]), w, g);
         const Vec3 vji = p.v[j] - vi;
         curl += p.m[j] * vji.cross(g * xij);
-        const Real volume = p.m[j] / p.rho[j];
-        num += volume * vji.norm() * w;
-        den += volume * w;
+        num += vj * vji.norm() * w;
+        den += vj * w;
       }
       m_rawOmega[i] = curl.norm() / p.rho[i];
       m_rawNu[i] = den > Real(0) ? num / den : Real(0);
+      setSurfaceFlag(p, i, isSurface(p, i, away, volume, fluidNbrs, boundaryNbrs, boundary));
     }
   });
-  // Both are then averaged over the kernel (Shepard): the SPH curl of a disordered particle set carries noise
-  // of the order of the velocity fluctuation over the support, which the raw values would mistake for
-  // vortices.
+}
+
+void LevelEstimator::startDistance(ParticleSet& p, Real cap, Real hop, int& passes) {
+  // phi is kept from step to step (it moves with the particles and children inherit it), so a couple of
+  // Jacobi passes of phi_i = min_j (phi_j + |x_ij|) per step follow the moving surface. The minimum runs over
+  // the neighbours only, not the particle's own previous value: distances may then grow as well as shrink by
+  // a hop per pass, and at rest the passes keep the exact graph distance (a minimum that included the old
+  // value would only shrink, and the earlier remedy, adding a hop to every particle before the passes, left
+  // every particle beyond the passes' reach one hop too far). A particle without a previous value (infinity)
+  // starts at the cap, and the first call runs to convergence.
+  const std::size_t n = p.size();
+  m_phiNext.resize(n);
+  bool fresh = false;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (p.flags[i] & kFlagSurface) {
+      p.phi[i] = 0;
+    } else if (!(p.phi[i] < cap)) {
+      fresh |= !std::isfinite(p.phi[i]);
+      p.phi[i] = cap;
+    }
+  }
+  passes = fresh ? std::min(kMaxPropagationPasses, int(std::ceil(cap / hop)) + 1) : kPassesPerStep;
+}
+
+Real LevelEstimator::distanceAt(const ParticleSet& p, std::size_t i, const NeighborList& fluidNbrs,
+                                Real cap) {
+  if (p.flags[i] & kFlagSurface)
+    return 0;
+  Real best = cap;
+  for (std::uint32_t k = fluidNbrs.offsets[i]; k < fluidNbrs.offsets[i + 1]; ++k) {
+    const std::uint32_t j = fluidNbrs.indices[k];
+    if (p.phi[j] >= best)
+      continue;  // cannot improve
+    best = std::min(best, p.phi[j] + (p.x[i] - p.x[j]).norm());
+  }
+  return best;
+}
+
+bool LevelEstimator::distancePass(ParticleSet& p, const NeighborList& fluidNbrs, Real cap,
+                                  bool smoothDynamics) {
+  const std::size_t n = p.size();
+  std::atomic<bool> changed{false};
   tbb::parallel_for(Range(0, n, kGrain), [&](const Range& r) {
+    bool local = false;
     for (std::size_t i = r.begin(); i < r.end(); ++i) {
-      const Real self = p.m[i] / p.rho[i] * CubicSpline::w0(p.H[i]);
-      Real omega = self * m_rawOmega[i];
-      Real nu = self * m_rawNu[i];
-      Real den = self;
-      for (std::uint32_t k = fluidNbrs.offsets[i]; k < fluidNbrs.offsets[i + 1]; ++k) {
-        const std::uint32_t j = fluidNbrs.indices[k];
-        const Real w =
-            p.m[j] / p.rho[j] * CubicSpline::w((p.x[i] - p.x[j]).norm(), pairSupport(p.H[i], p.H[j]));
-        omega += w * m_rawOmega[j];
-        nu += w * m_rawNu[j];
-        den += w;
-      }
-      p.omega[i] = omega / den;
-      p.nu[i] = nu / den;
+      const Real best = distanceAt(p, i, fluidNbrs, cap);
+      local |= best != p.phi[i];
+      m_phiNext[i] = best;
+      if (smoothDynamics)
+        smoothDynamicsAt(p, i, fluidNbrs);
     }
+    if (local)
+      changed = true;
   });
+  p.phi.swap(m_phiNext);
+  return changed;
+}
+
+void LevelEstimator::smoothDynamicsAt(ParticleSet& p, std::size_t i, const NeighborList& fluidNbrs) const {
+  // The raw values are averaged over the kernel (Shepard): the SPH curl of a disordered particle set carries
+  // noise of the order of the velocity fluctuation over the support, which the raw values would mistake for
+  // vortices.
+  const Real self = p.m[i] / p.rho[i] * CubicSpline::w0(p.H[i]);
+  Real omega = self * m_rawOmega[i];
+  Real nu = self * m_rawNu[i];
+  Real den = self;
+  for (std::uint32_t k = fluidNbrs.offsets[i]; k < fluidNbrs.offsets[i + 1]; ++k) {
+    const std::uint32_t j = fluidNbrs.indices[k];
+    const Real w = p.m[j] / p.rho[j] * CubicSpline::w((p.x[i] - p.x[j]).norm(), pairSupport(p.H[i], p.H[j]));
+    omega += w * m_rawOmega[j];
+    nu += w * m_rawNu[j];
+    den += w;
+  }
+  p.omega[i] = omega / den;
+  p.nu[i] = nu / den;
 }
 
 void LevelEstimator::compute(ParticleSet& p, const NeighborList& fluidNbrs, const NeighborList& boundaryNbrs,
@@ -202,17 +241,44 @@ void LevelEstimator::compute(ParticleSet& p, const NeighborList& fluidNbrs, cons
   const std::size_t n = p.size();
   const Real r = Real(params.particleRadius);
   const double mBase = double(mFine) * params.massRatio;
-  detectSurface(p, fluidNbrs, boundaryNbrs, boundary);
-  const double lo = params.surfaceDistanceLo * r;
-  const double hi = params.surfaceDistanceHi * r;
-  propagateDistance(p, fluidNbrs, Real(hi), Real(2) * r);
   const bool dynamic = mode == AdaptivityMode::FluidPlaying;
+  // Three passes over the neighbours in all: surface, raw curl and velocity difference; their kernel average
+  // with the first distance pass; the second distance pass.
   if (dynamic) {
-    vorticityAndVelocityDifference(p, fluidNbrs);
+    surfaceAndRawDynamics(p, fluidNbrs, boundaryNbrs, boundary);
   } else {
+    detectSurface(p, fluidNbrs, boundaryNbrs, boundary);
     std::fill(p.omega.begin(), p.omega.end(), Real(0));
     std::fill(p.nu.begin(), p.nu.end(), Real(0));
   }
+  const double lo = params.surfaceDistanceLo * r;
+  const double hi = params.surfaceDistanceHi * r;
+  const Real cap = Real(hi);
+  int passes = 0;
+  startDistance(p, cap, Real(2) * r, passes);
+  // (the first pass always runs: it also averages omega and nu)
+  for (int pass = 0; pass < passes; ++pass) {
+    if (!distancePass(p, fluidNbrs, cap, dynamic && pass == 0))
+      break;
+  }
+  // CFL-aware refinement: the fine particles at the surface set the time step (dt = cfl 2 r / v there), and
+  // a particle refined for its vorticity or velocity difference must not force a smaller one. A particle
+  // moving at v takes the surface's step at a radius of r v / v_surface, a mass of m_fine (v / v_surface)^3:
+  // the dynamic levels refine it down to that mass, no further.
+  const bool cflLimit = dynamic && params.cflLimitedRefinement;
+  double surfaceSpeed2 = 0.0;
+  if (cflLimit) {
+    for (std::size_t i = 0; i < n; ++i) {
+      if (p.phi[i] <= Real(lo))
+        surfaceSpeed2 = std::max(surfaceSpeed2, double(p.v[i].squaredNorm()));
+    }
+  }
+  // a margin for particles that speed up between the levels and their split
+  constexpr double kCflSpeedMargin = 1.1;
+  // the step a fine particle allows at unit speed, and the target step: the surface's, at most dt_max
+  const double fineLimit = params.cflFactor * 2.0 * double(r);
+  const double dtTarget =
+      surfaceSpeed2 > 0.0 ? std::min(params.dtMax, fineLimit / std::sqrt(surfaceSpeed2)) : params.dtMax;
   target.resize(n);
   tbb::parallel_for(Range(0, n, kGrain), [&](const Range& rg) {
     for (std::size_t i = rg.begin(); i < rg.end(); ++i) {
@@ -227,7 +293,18 @@ void LevelEstimator::compute(ParticleSet& p, const NeighborList& fluidNbrs, cons
       p.levelPhi[i] = Real(rPhi);
       p.levelOmega[i] = Real(rOmega);
       p.levelNu[i] = Real(rNu);
-      target[i] = Real(optimalMass(rPhi, rOmega, rNu, double(mFine), mBase));
+      double m = optimalMass(rPhi, rOmega, rNu, double(mFine), mBase);
+      if (cflLimit) {
+        const double mSurface = optimalMass(rPhi, 1.0, 1.0, double(mFine), mBase);
+        if (m < mSurface) {
+          // the radius over the fine one at which this particle allows the target step
+          const double ratio =
+              kCflSpeedMargin * std::sqrt(double(p.v[i].squaredNorm())) * dtTarget / fineLimit;
+          const double mCfl = double(mFine) * std::min(1e6, ratio * ratio * ratio);
+          m = std::max(m, std::min(mSurface, mCfl));
+        }
+      }
+      target[i] = Real(m);
     }
   });
 }

@@ -46,8 +46,18 @@ class LevelEstimator {
   std::size_t memoryBytes() const;
 
  private:
-  void propagateDistance(ParticleSet& p, const NeighborList& fluidNbrs, Real cap, Real hop);
-  void vorticityAndVelocityDifference(ParticleSet& p, const NeighborList& fluidNbrs);
+  /// surface flags and the raw (unaveraged) omega and nu, in one pass over the neighbours
+  void surfaceAndRawDynamics(ParticleSet& p, const NeighborList& fluidNbrs, const NeighborList& boundaryNbrs,
+                             const BoundarySet& boundary);
+  /// phi = 0 on the surface, the cap where unknown; sets the number of distance passes to run
+  void startDistance(ParticleSet& p, Real cap, Real hop, int& passes);
+  /// min_j (phi_j + |x_ij|) over the neighbours of i, at most `cap` [m]
+  static Real distanceAt(const ParticleSet& p, std::size_t i, const NeighborList& fluidNbrs, Real cap);
+  /// one Jacobi pass of the distance, with the kernel average of omega and nu when `smoothDynamics`;
+  /// true when some phi changed
+  bool distancePass(ParticleSet& p, const NeighborList& fluidNbrs, Real cap, bool smoothDynamics);
+  /// omega_i and nu_i: the kernel average of the raw values
+  void smoothDynamicsAt(ParticleSet& p, std::size_t i, const NeighborList& fluidNbrs) const;
 
   std::vector<Real> m_phiNext;
   std::vector<Real> m_rawOmega;

@@ -31,4 +31,20 @@ double heightPercentile(const ParticleSet& p, double fraction, const SplashParti
   return yw.back().first;
 }
 
+DensityErrorMeans densityErrorMeans(const ParticleSet& p, double restDensity) {
+  DensityErrorMeans out;
+  double sum = 0.0, weighted = 0.0, volume = 0.0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const double e = std::max(0.0, double(p.rho[i]) / restDensity - 1.0);
+    sum += e;
+    weighted += double(p.m[i]) * e;
+    volume += double(p.m[i]);
+  }
+  if (p.size() > 0)
+    out.perParticle = sum / double(p.size());
+  if (volume > 0.0)
+    out.volumeWeighted = weighted / volume;
+  return out;
+}
+
 }  // namespace fp::sim

@@ -13,4 +13,13 @@ namespace fp::sim {
 double heightPercentile(const ParticleSet& p, double fraction, const SplashParticles* splash = nullptr,
                         int perSource = 1);
 
+/// Mean density errors of a state, from the densities of its last step.
+struct DensityErrorMeans {
+  double perParticle = 0.0;     ///< mean over particles of max(0, rho / rho0 - 1) [-]
+  double volumeWeighted = 0.0;  ///< the same weighted by rest volume m / rho0: a coarse particle of 27 fine
+                                ///< masses counts 27 times [-]
+};
+/// The mean compression max(0, rho / rho0 - 1), per particle and volume-weighted; zeros for no particles.
+DensityErrorMeans densityErrorMeans(const ParticleSet& p, double restDensity);
+
 }  // namespace fp::sim

@@ -47,10 +47,10 @@ ParamTable::ParamTable() : ParamTableOf<SimParams>("parameter", &ParamTable::val
       "m_base / m_fine: mass of the coarsest particles over the finest", &P::massRatio, 27.0);
   add("surface_distance_lo", "adaptivity", "r", 0.0, 1000.0, live,
       "distance to the surface below which particles are finest, R_phi = 0 (in fine radii)",
-      &P::surfaceDistanceLo, 2.0);
+      &P::surfaceDistanceLo, 0.0);
   add("surface_distance_hi", "adaptivity", "r", 0.0, 1000.0, live,
       "distance to the surface above which particles are coarsest, R_phi = 1 (in fine radii)",
-      &P::surfaceDistanceHi, 12.0);
+      &P::surfaceDistanceHi, 8.0);
   add("vorticity_lo", "adaptivity", "1/s", 0.0, 1e4, live,
       "vorticity at which refinement starts (R_omega = 1)", &P::vorticityLo, 6.0);
   add("vorticity_hi", "adaptivity", "1/s", 0.0, 1e4, live, "vorticity of full refinement (R_omega = Rmax)",
@@ -64,11 +64,18 @@ ParamTable::ParamTable() : ParamTableOf<SimParams>("parameter", &ParamTable::val
   add("velocity_difference_rmax", "adaptivity", "-", 1.0, 1000.0, live,
       "largest velocity-difference level Rmax_nu", &P::velocityDifferenceRmax, 8.0);
   add("mass_smoothing", "adaptivity", "-", 0.01, 1.0, live,
-      "share of the new optimal mass taken per adaptation step (1: no smoothing)", &P::massSmoothing, 0.25);
+      "share of the new optimal mass taken per solver step (1: no smoothing)", &P::massSmoothing, 0.25);
   add("adaptation_period", "adaptivity", "steps", 1, 100, live, "solver steps between adaptation steps",
       &P::adaptationPeriod, 1);
+  add("levels_period", "adaptivity", "-", 1, 100, live,
+      "adaptation steps between computations of the levels (the optimal masses in between are kept)",
+      &P::levelsPeriod, 4);
+  add("cfl_limited_refinement", "adaptivity", "-", 0, 1, live,
+      "vorticity and velocity difference refine a particle only as far as keeps the time step the surface "
+      "allows",
+      &P::cflLimitedRefinement, true);
   add("split_delay", "adaptivity", "steps", 0, 100, live,
-      "adaptation steps a particle must stay too heavy before it splits", &P::splitDelay, 13);
+      "solver steps a particle must stay too heavy before it splits", &P::splitDelay, 13);
   add("split_max_children", "adaptivity", "-", 8, 27, live, "n_max: most children of one split",
       &P::splitMaxChildren, 27);
   add("orientation_candidates", "adaptivity", "-", 1, 64, live,
@@ -82,8 +89,7 @@ ParamTable::ParamTable() : ParamTableOf<SimParams>("parameter", &ParamTable::val
   add("split_above", "adaptivity", "-", 1.0, 10.0, live, "m / m_opt at or above which a particle splits",
       &P::splitAbove, 1.99);
   add("transfer_rate", "adaptivity", "-", 0.01, 1.0, live,
-      "most mass a merge or share receiver gains per adaptation step (share of its own)", &P::transferRate,
-      0.05);
+      "most mass a merge or share receiver gains per solver step (share of its own)", &P::transferRate, 0.05);
   add("support_blend_steps", "adaptivity", "steps", 0, 100, live,
       "steps over which a changed support radius is blended in (0: at once)", &P::supportBlendSteps, 10);
   // splash enhancement (docs/method.md, Splash)

@@ -52,6 +52,8 @@ struct SimParams {
   double velocityDifferenceRmax;
   double massSmoothing;
   int adaptationPeriod;
+  int levelsPeriod;
+  bool cflLimitedRefinement;
   int splitDelay;
   int splitMaxChildren;
   int orientationCandidates;

@@ -287,7 +287,9 @@ void Simulation::computeLevels(bool smooth) {
                    m_target);
   const Real mFine = m_latticeMass;
   const Real mBase = baseMass();
-  const Real gamma = smooth ? Real(m_params.massSmoothing) : Real(1);
+  // levels computed every k solver steps move the target as far as k steps of smoothing would
+  const int k = std::max(1, m_params.adaptationPeriod) * std::max(1, m_params.levelsPeriod);
+  const Real gamma = smooth ? Real(1.0 - std::pow(1.0 - m_params.massSmoothing, k)) : Real(1);
   for (std::size_t i = 0; i < m_fluid.size(); ++i) {
     const Real m = m_fluid.mOpt[i] + gamma * (m_target[i] - m_fluid.mOpt[i]);
     m_fluid.mOpt[i] = std::clamp(m, mFine, std::max(mFine, mBase));
@@ -426,7 +428,11 @@ void Simulation::step() {
   st.times.density = seconds(t2, t3);
   const bool adaptNow =
       adaptive() && m_stepCount % std::uint64_t(std::max(1, m_params.adaptationPeriod)) == 0;
-  if (adaptNow) {
+  // the levels of every levels_period-th adaptation step; the optimal masses are kept in between
+  const bool levelsNow = adaptNow && m_stepCount % (std::uint64_t(std::max(1, m_params.adaptationPeriod)) *
+                                                    std::uint64_t(std::max(1, m_params.levelsPeriod))) ==
+                                         0;
+  if (levelsNow) {
     computeLevels(true);
     const auto tl = Clock::now();
     st.times.levels = seconds(t3, tl);
@@ -462,6 +468,14 @@ void Simulation::step() {
     // the lists of this step's start still index the particles: nothing was reordered since
     if (adaptNow)
       st.adaptivity = adaptResolution(false);
+    if (st.adaptivity.splits + st.adaptivity.merges > 0) {
+      // the particles were added and removed: the lists no longer index them (capacity is kept for the next
+      // search)
+      m_fluidNbrs.offsets.clear();
+      m_fluidNbrs.indices.clear();
+      m_boundaryNbrs.offsets.clear();
+      m_boundaryNbrs.indices.clear();
+    }
     Adaptivity::blendSupports(m_fluid, m_params, m_latticeMass);
     st.times.adaptation = seconds(t8, Clock::now());
   }

@@ -99,10 +99,16 @@ class Simulation {
   void resetRunStats() { m_run = RunStats{}; }
   /// momentum given to the fluid by boundaries since construction [kg m/s]
   const Vec3d& boundaryImpulse() const { return m_boundaryImpulse; }
-  /// fluid neighbours of each fluid particle (valid after a step)
+  /// fluid neighbours of each fluid particle at the start of the last step; empty when that step split or
+  /// merged particles (see neighborsValid())
   const NeighborList& fluidNeighbors() const { return m_fluidNbrs; }
-  /// boundary neighbours of each fluid particle (valid after a step)
+  /// boundary neighbours of each fluid particle, like fluidNeighbors()
   const NeighborList& boundaryNeighbors() const { return m_boundaryNbrs; }
+  /// true when fluidNeighbors() and boundaryNeighbors() index the current particles
+  bool neighborsValid() const {
+    return m_fluidNbrs.offsets.size() == m_fluid.size() + 1 &&
+           m_boundaryNbrs.offsets.size() == m_fluid.size() + 1;
+  }
 
   /// Sets the pose and velocity of a driven collider for the coming step (the hand). Throws InputError for a
   /// collider that is not driven.

@@ -9,11 +9,13 @@
 /// (with
 /// --images) one rendered image per mode at the same instant, side by side like the paper's figure 3.
 ///
-///   fp_bench_modes [--scene FILE] [--sim-time S] [--modes a,b,..] [--threads T] [--set KEY=VALUE]...
-///                  [--csv FILE] [--out DIR [--images] [--image-time S]] [--quick] [--help]
+///   fp_bench_modes [--scene FILE] [--sim-time S] [--modes a,b,..] [--threads T] [--runs N]
+///                  [--set KEY=VALUE]... [--csv FILE] [--out DIR [--images] [--image-time S]] [--quick]
+///                  [--help]
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -46,6 +48,8 @@ constexpr double kQuickSimTime = 0.3;
 constexpr double kHeightFraction = 0.999;
 /// simulated seconds of the still run that gives each mode's resting level
 constexpr double kDefaultRestTime = 0.5;
+/// starting phase between the perturbed runs of a mode: a fraction of a blade's turn [rad]
+constexpr double kPhaseStep = 0.4;
 
 /// One frame of a run.
 struct Sample {
@@ -54,6 +58,11 @@ struct Sample {
   double height = 0;          // 99.9th-percentile fluid height above the resting level [m]
   double heightSplash = 0;    // the same with the splash particles [m]
   std::size_t splash = 0;     // splash particles
+  // what the particles are refined for (adaptive modes, from the last levels): fully fine at the surface
+  // (R_phi = 0), in the graded band below it, refined by vorticity or velocity difference, at the base mass;
+  // and how many are too light, waiting to merge
+  std::size_t surfaceFine = 0, band = 0, dynamic = 0, base = 0, tooLight = 0;
+  sim::DensityErrorMeans densityError;  // of the last step's densities
 };
 
 struct Row {
@@ -69,6 +78,10 @@ struct Row {
   double densityError = 0;
   sim::AdaptivityStats adaptivity;
   double adaptivityShare = 0;
+  double levelsShare = 0;                                                 // levels alone, share of step time
+  double surfaceFine = 0, band = 0, dynamic = 0, base = 0, tooLight = 0;  // mean particles per frame
+  double densityErrorParticles = 0, densityErrorVolume = 0;  // frame means, per particle and volume-weighted
+  std::vector<double> runHeightMean, runHeightMax;           // heightMean and heightMax of every run [m]
 };
 
 std::string machineDescription() {
@@ -138,10 +151,9 @@ void writePlot(const std::string& path, const std::string& title, const std::str
   f << "</svg>\n";
 }
 
-/// Runs one mode. The wall time counts the simulation only: frame sampling, splash and rendering are timed
-/// out.
 /// The resting level of a mode: the same scene with every collider held still, run for `restTime`, then the
-/// 99.9 % mass height averaged over the last fifth of it. Each mode has its own: coarse particles keep a
+/// median of the 99.9 % mass height over the steps of its second half (a median, so that the slosh of a start
+/// that was not settled, uniform-high's, does not shift it). Each mode has its own: coarse particles keep a
 /// larger distance from the floor (the wall holds them at about 2.2 of their own radii), which lifts the
 /// whole water surface by a few fine radii, and that must not count as splash.
 double restingLevel(sim::SceneDesc scene, double restTime) {
@@ -151,24 +163,37 @@ double restingLevel(sim::SceneDesc scene, double restTime) {
     c.driven = false;
   }
   sim::Simulation simulation(scene);
-  double sum = 0.0;
-  int count = 0;
+  std::vector<double> heights;
   while (simulation.time() < restTime) {
     simulation.step();
-    if (simulation.time() > 0.8 * restTime) {
-      sum += sim::heightPercentile(simulation.particles(), kHeightFraction);
-      ++count;
-    }
+    if (simulation.time() > 0.5 * restTime)
+      heights.push_back(sim::heightPercentile(simulation.particles(), kHeightFraction));
   }
-  return count ? sum / count : sim::heightPercentile(simulation.particles(), kHeightFraction);
+  if (heights.empty())
+    return sim::heightPercentile(simulation.particles(), kHeightFraction);
+  std::nth_element(heights.begin(), heights.begin() + std::ptrdiff_t(heights.size() / 2), heights.end());
+  return heights[heights.size() / 2];
 }
 
-Row runMode(sim::SceneDesc scene, sim::AdaptivityMode mode, double simTime, double restTime, double imageTime,
+/// The scene with every spinning collider started `angle` further along its spin [rad]: a perturbed start of
+/// the same experiment.
+sim::SceneDesc withStartingPhase(sim::SceneDesc scene, double angle) {
+  for (sim::ColliderDesc& c : scene.colliders) {
+    if (c.driven || c.angularVelocity.norm() <= 0.0)
+      continue;
+    c.orientation =
+        (sim::Quatd(Eigen::AngleAxisd(angle, c.angularVelocity.normalized())) * c.orientation).normalized();
+  }
+  return scene;
+}
+
+/// One run of one mode, its heights measured above the resting level `rest` [m]. The wall time counts the
+/// simulation only: frame sampling, splash and rendering are timed out.
+Row runMode(sim::SceneDesc scene, sim::AdaptivityMode mode, double simTime, double rest, double imageTime,
             engine::HeadlessRender* render, sim::SplashParticles* imageSplash) {
   scene.mode = mode;
   Row row;
   row.mode = sim::modeName(mode);
-  const double rest = restingLevel(scene, restTime);
   row.restLevel = rest;
   sim::Simulation simulation(scene);
   sim::SplashGenerator splash;
@@ -185,6 +210,22 @@ Row runMode(sim::SceneDesc scene, sim::AdaptivityMode mode, double simTime, doub
         sim::heightPercentile(simulation.particles(), kHeightFraction, &sp, scene.params.splashCount);
     s.height -= rest;
     s.heightSplash -= rest;
+    s.densityError = sim::densityErrorMeans(simulation.particles(), scene.params.restDensity);
+    if (simulation.adaptive()) {
+      const sim::ParticleSet& p = simulation.particles();
+      for (std::size_t i = 0; i < p.size(); ++i) {
+        if (p.levelOmega[i] * p.levelNu[i] > sim::Real(1.01))
+          ++s.dynamic;
+        else if (p.levelPhi[i] <= sim::Real(0))
+          ++s.surfaceFine;
+        else if (p.levelPhi[i] < sim::Real(1))
+          ++s.band;
+        else
+          ++s.base;
+        if (p.m[i] < sim::Real(scene.params.mergeBelow) * p.mOpt[i])
+          ++s.tooLight;
+      }
+    }
     row.series.push_back(s);
     if (render && !imageDone && simulation.time() >= imageTime - 1e-9) {
       render->renderFrame(0, simulation, &sp);
@@ -217,6 +258,16 @@ Row runMode(sim::SceneDesc scene, sim::AdaptivityMode mode, double simTime, doub
     row.splashMean += double(s.splash) / double(row.series.size());
     row.heightMax = std::max(row.heightMax, s.height);
     row.heightSplashMax = std::max(row.heightSplashMax, s.heightSplash);
+    const double f = 1.0 / double(row.series.size());
+    row.surfaceFine += f * double(s.surfaceFine);
+    row.band += f * double(s.band);
+    row.dynamic += f * double(s.dynamic);
+    row.base += f * double(s.base);
+    row.tooLight += f * double(s.tooLight);
+    if (s.t > 0) {
+      row.densityErrorParticles += s.densityError.perParticle / double(row.series.size() - 1);
+      row.densityErrorVolume += s.densityError.volumeWeighted / double(row.series.size() - 1);
+    }
   }
   const sim::RunStats& run = simulation.runStats();
   row.steps = run.steps;
@@ -226,6 +277,42 @@ Row runMode(sim::SceneDesc scene, sim::AdaptivityMode mode, double simTime, doub
   row.adaptivity = run.adaptivity;
   const double total = run.times.total();
   row.adaptivityShare = total > 0 ? (run.times.levels + run.times.adaptation) / total : 0.0;
+  row.levelsShare = total > 0 ? run.times.levels / total : 0.0;
+  row.runHeightMean.push_back(row.heightMean);
+  row.runHeightMax.push_back(row.heightMax);
+  return row;
+}
+
+/// Mean and sample standard deviation.
+std::pair<double, double> meanAndSpread(const std::vector<double>& v) {
+  if (v.empty())
+    return {0.0, 0.0};
+  double mean = 0.0;
+  for (double x : v)
+    mean += x / double(v.size());
+  double var = 0.0;
+  for (double x : v)
+    var += (x - mean) * (x - mean);
+  return {mean, v.size() > 1 ? std::sqrt(var / double(v.size() - 1)) : 0.0};
+}
+
+/// `runs` runs of one mode, the k-th with the spinning colliders' starting phase advanced by k kPhaseStep
+/// (one resting level for all): the figures of the first run, and the splash heights of every run.
+Row runModeRepeated(const sim::SceneDesc& scene, sim::AdaptivityMode mode, double simTime, double restTime,
+                    double imageTime, engine::HeadlessRender* render, int runs) {
+  sim::SceneDesc still = scene;
+  still.mode = mode;
+  const double rest = restingLevel(still, restTime);
+  Row row = runMode(scene, mode, simTime, rest, imageTime, render, nullptr);
+  for (int k = 1; k < runs && row.status == "ok"; ++k) {
+    std::fprintf(stderr, "    run %d of %d ...\n", k + 1, runs);
+    const Row more =
+        runMode(withStartingPhase(scene, k * kPhaseStep), mode, simTime, rest, imageTime, nullptr, nullptr);
+    if (more.status != "ok")
+      row.status = more.status;
+    row.runHeightMean.push_back(more.heightMean);
+    row.runHeightMax.push_back(more.heightMax);
+  }
   return row;
 }
 
@@ -240,6 +327,7 @@ int main(int argc, char** argv) {
   double imageTime = -1.0;
   double restTime = kDefaultRestTime;
   int threads = 0;
+  int runs = 1;  // runs per mode with perturbed starts
   std::vector<sim::AdaptivityMode> modes = {sim::AdaptivityMode::UniformLow, sim::AdaptivityMode::UniformHigh,
                                             sim::AdaptivityMode::Surface, sim::AdaptivityMode::FluidPlaying};
   std::vector<std::string> sets;
@@ -278,6 +366,10 @@ int main(int argc, char** argv) {
         ->type_name("LIST");
     line.addInteger(
         "--threads", [&](long long n) { threads = int(n); }, 1, 1024, "worker threads (default: all cores)");
+    line.addInteger(
+        "--runs", [&](long long n) { runs = int(n); }, 1, 100,
+        "runs per mode, the spinning colliders' starting phase 0.4 rad apart: splash height mean and spread "
+        "(default 1)");
     line.addSet(sets);
     app.add_option("--csv", csvPath, "also write the table as CSV")->type_name("FILE");
     app.add_option("--out", outDir,
@@ -352,12 +444,24 @@ int main(int argc, char** argv) {
       }
       imagePaths.push_back((std::filesystem::path(options.outDir) / "frame_00000.png").string());
     }
-    rows.push_back(runMode(scene, m, simTime, restTime, imageTime, render.get(), nullptr));
+    rows.push_back(runModeRepeated(scene, m, simTime, restTime, imageTime, render.get(), runs));
   }
   const Row* high = nullptr;
   for (const Row& r : rows)
     if (r.mode == "uniform-high")
       high = &r;
+  // Without a uniform-high run the shares still have their reference: its particle count never changes, so
+  // building it is enough (speed-ups stay unknown).
+  Row highCount;
+  if (!high) {
+    sim::SceneDesc fine = scene;
+    fine.mode = sim::AdaptivityMode::UniformHigh;
+    const sim::Simulation reference(fine);
+    highCount.mode = "uniform-high (not run)";
+    highCount.particlesMean = double(reference.particles().size());
+    highCount.particlesMax = reference.particles().size();
+    high = &highCount;
+  }
 
   std::printf("\n%-13s %9s %7s %8s %10s %7s %9s %7s %9s %9s %9s %9s %8s %9s %9s %8s\n", "mode", "wall [s]",
               "speedup", "steps", "particles", "share", "max", "share", "h99.9 mm", "max mm", "+spl. mm",
@@ -367,10 +471,14 @@ int main(int argc, char** argv) {
          "particles_max_share,splash_height_mean_m,splash_height_max_m,splash_height_with_splash_mean_m,"
          "splash_height_with_splash_max_m,resting_level_m,splash_particles_mean,density_error_mean,split_"
          "error_reduction,"
-         "adaptivity_share,splits,merges,redistributions,sim_time_s,particle_radius_m,threads,machine\n";
+         "adaptivity_share,splits,merges,redistributions,sim_time_s,particle_radius_m,threads,machine,levels_"
+         "share,"
+         "density_error_frames_per_particle,density_error_frames_volume_weighted,runs,splash_height_mean_"
+         "runs_m,"
+         "splash_height_mean_spread_m,splash_height_max_runs_m,splash_height_max_spread_m\n";
   bool allOk = true;
   for (const Row& r : rows) {
-    const double speedup = high && r.wall > 0 ? high->wall / r.wall : 0.0;
+    const double speedup = high && high->wall > 0 && r.wall > 0 ? high->wall / r.wall : 0.0;
     const double meanShare = high && high->particlesMean > 0 ? r.particlesMean / high->particlesMean : 0.0;
     const double maxShare =
         high && high->particlesMax > 0 ? double(r.particlesMax) / double(high->particlesMax) : 0.0;
@@ -391,7 +499,46 @@ int main(int argc, char** argv) {
         << "," << r.restLevel << "," << r.splashMean << "," << r.densityError << ","
         << r.adaptivity.splitErrorReduction() << "," << r.adaptivityShare << "," << r.adaptivity.splits << ","
         << r.adaptivity.merges << "," << r.adaptivity.redistributions << "," << simTime << ","
-        << scene.params.particleRadius << "," << threads << ",\"" << machine << "\"\n";
+        << scene.params.particleRadius << "," << threads << ",\"" << machine << "\"," << r.levelsShare << ","
+        << r.densityErrorParticles << "," << r.densityErrorVolume << "," << r.runHeightMean.size() << ","
+        << meanAndSpread(r.runHeightMean).first << "," << meanAndSpread(r.runHeightMean).second << ","
+        << meanAndSpread(r.runHeightMax).first << "," << meanAndSpread(r.runHeightMax).second << "\n";
+  }
+  std::printf(
+      "\nparticles by what they are refined for, mean per frame as a share of uniform-high's count:\n");
+  std::printf("%-13s %9s %9s %9s %9s %9s %8s %10s %10s\n", "mode", "surface", "band", "dynamic", "base",
+              "too light", "levels%", "err% part", "err% vol");
+  for (const Row& r : rows) {
+    const double u = high && high->particlesMean > 0 ? 100.0 / high->particlesMean : 0.0;
+    std::printf("%-13s %8.2f%% %8.2f%% %8.2f%% %8.2f%% %8.2f%% %8.1f %10.3f %10.3f\n", r.mode.c_str(),
+                u * r.surfaceFine, u * r.band, u * r.dynamic, u * r.base, u * r.tooLight, 100 * r.levelsShare,
+                100 * r.densityErrorParticles, 100 * r.densityErrorVolume);
+  }
+  if (runs > 1) {
+    // an order between two modes is claimed only where the means differ by more than the spreads
+    std::printf(
+        "\nsplash height over %d runs (starting phases %g rad apart): mean +- standard deviation [mm]\n",
+        runs, kPhaseStep);
+    std::printf("%-13s %17s %17s\n", "mode", "h99.9 mean", "h99.9 max");
+    for (const Row& r : rows) {
+      const auto [mean, spread] = meanAndSpread(r.runHeightMean);
+      const auto [max, maxSpread] = meanAndSpread(r.runHeightMax);
+      std::printf("%-13s %8.1f +- %5.1f %8.1f +- %5.1f\n", r.mode.c_str(), 1000 * mean, 1000 * spread,
+                  1000 * max, 1000 * maxSpread);
+    }
+    for (const Row& a : rows) {
+      for (const Row& b : rows) {
+        if (&a == &b || a.mode != "fluidplaying")
+          continue;
+        const auto [ma, sa] = meanAndSpread(a.runHeightMean);
+        const auto [mb, sb] = meanAndSpread(b.runHeightMean);
+        const double d = ma - mb;
+        const double noise = sa + sb;
+        std::printf("%s - %s: %+.1f mm (spreads %.1f mm together): %s\n", a.mode.c_str(), b.mode.c_str(),
+                    1000 * d, 1000 * noise,
+                    std::abs(d) > noise ? (d > 0 ? "higher" : "lower") : "within the noise");
+      }
+    }
   }
   std::printf("\nCSV\n%s", csv.str().c_str());
   if (!outDir.empty()) {

@@ -306,6 +306,126 @@ TEST(LevelsTest, SurfaceOfARestingBlockIsItsTopFaceAndPhiGrowsWithDepthSmall) {
   }
 }
 
+TEST(LevelsTest, PhiStaysTheExactSurfaceDistanceStepAfterStepSmall) {
+  // The same resting block, its levels computed again and again as during a run (after the first call, two
+  // Jacobi passes per call): phi must stay the exact distance to the top face at every depth, not drift a hop
+  // too far beyond the reach of the passes. (A cap of 16 r: eight layers deep.)
+  SceneDesc scene;
+  scene.params.particleRadius = 0.1 / 10.4;
+  scene.params.surfaceDistanceHi = 16.0;
+  ColliderDesc tank;
+  tank.shape = ShapeType::Box;
+  tank.container = true;
+  tank.halfExtents = Vec3d(0.1, 0.15, 0.1);
+  tank.position = Vec3d(0, 0.15, 0);
+  scene.colliders.push_back(tank);
+  scene.fluid.push_back(FluidBlock{Aabb(Vec3d(-0.1, 0, -0.1), Vec3d(0.1, 0.24, 0.1)), Vec3d::Zero()});
+  scene.domain = Aabb(Vec3d(-0.15, -0.05, -0.15), Vec3d(0.15, 0.35, 0.15));
+  Simulation sim(scene);
+  sim.step();
+  ASSERT_TRUE(sim.neighborsValid());
+  ParticleSet p = sim.particles();
+  const Real r = Real(scene.params.particleRadius);
+  Real top = 0;
+  for (const Vec3& x : p.x)
+    top = std::max(top, x.y());
+  std::vector<Real> target;
+  LevelEstimator levels;
+  for (int call = 0; call < 8; ++call)
+    levels.compute(p, sim.fluidNeighbors(), sim.boundaryNeighbors(), sim.boundary(), scene.params,
+                   AdaptivityMode::FluidPlaying, sim.latticeMass(), target);
+  const double cap = scene.params.surfaceDistanceHi * r;
+  int checked = 0;
+  double worst = 0.0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    // away from the side walls, whose particles sit off the lattice
+    if (std::abs(p.x[i].x()) > 0.05f || std::abs(p.x[i].z()) > 0.05f || p.x[i].y() < 4 * r)
+      continue;
+    const double exact = std::min(cap, double(top - p.x[i].y()));
+    worst = std::max(worst, std::abs(double(p.phi[i]) - exact));
+    ++checked;
+  }
+  ASSERT_GT(checked, 100);
+  EXPECT_LT(worst, 0.2 * r) << "largest |phi - exact distance| in fine radii: " << worst / r;
+}
+
+TEST(AdaptivityTest, MergeLeavesNoSliverOfTheDonorSmall) {
+  // A too-light donor whose receivers' rooms add up to its mass only up to round-off: the receivers take all
+  // of it and the donor is gone, with mass and momentum kept.
+  SimParams params;
+  params.particleRadius = 0.01;
+  params.transferRate = 1.0;
+  const Real r = Real(params.particleRadius);
+  const Real mFine = Real(params.restDensity * 8e-6);
+  ParticleSet p;
+  const Real H = supportForMass(mFine, mFine, r);
+  // rooms 0.1, 0.2 and 0.3 m_fine, the donor 0.6 m_fine: 0.1 + 0.2 + 0.3 != 0.6 in floating point
+  const Real rooms[] = {0.3f, 0.1f, 0.2f};
+  p.add(Vec3::Zero(), Vec3(1, 0, 0), Real(0.6) * mFine, H, 1000.0f);
+  p.mOpt[0] = Real(2) * mFine;
+  for (int k = 0; k < 3; ++k) {
+    // light receivers (m / m_opt between merge_below and light_below)
+    const std::size_t j = p.add(Vec3(Real(k + 1) * r, 0, 0), Vec3::Zero(), Real(0.5) * mFine, H, 1000.0f);
+    p.mOpt[j] = (Real(0.5) + rooms[k]) * mFine;
+  }
+  NeighborList fluidNbrs;
+  NeighborList boundaryNbrs;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    fluidNbrs.offsets.push_back(std::uint32_t(fluidNbrs.indices.size()));
+    boundaryNbrs.offsets.push_back(0);
+    for (std::size_t j = 0; j < p.size(); ++j)
+      if (j != i)
+        fluidNbrs.indices.push_back(std::uint32_t(j));
+  }
+  fluidNbrs.offsets.push_back(std::uint32_t(fluidNbrs.indices.size()));
+  boundaryNbrs.offsets.push_back(0);
+  BoundarySet boundary;
+  std::vector<ColliderState> colliders;
+  const double mass = p.totalMass();
+  const Vec3d momentum = p.totalMomentum();
+  Adaptivity adaptivity;
+  const AdaptivityStats st = adaptivity.adapt(
+      AdaptContext{p, fluidNbrs, boundaryNbrs, boundary, colliders, params, mFine, 0.0, 0}, true);
+  EXPECT_EQ(st.merges, 1u);
+  ASSERT_EQ(p.size(), 3u);
+  for (Real m : p.m)
+    EXPECT_GE(m, Real(0.5) * mFine);
+  EXPECT_NEAR(p.totalMass(), mass, 1e-6 * mass);
+  EXPECT_LT((p.totalMomentum() - momentum).norm(), 1e-6 * mass);
+}
+
+TEST(AdaptivityTest, NeighbourListsAreInvalidAfterAStepThatSplitOrMergedSmall) {
+  SceneDesc scene;
+  scene.params.particleRadius = 0.012;
+  scene.mode = AdaptivityMode::FluidPlaying;
+  ColliderDesc tank;
+  tank.shape = ShapeType::Box;
+  tank.container = true;
+  tank.halfExtents = Vec3d(0.12, 0.15, 0.12);
+  tank.position = Vec3d(0, 0.15, 0);
+  scene.colliders.push_back(tank);
+  scene.fluid.push_back(FluidBlock{Aabb(Vec3d(-0.12, 0, -0.12), Vec3d(0.12, 0.2, 0.12)), Vec3d(0.5, 0, 0)});
+  scene.domain = Aabb(Vec3d(-0.2, -0.05, -0.2), Vec3d(0.2, 0.35, 0.2));
+  Simulation sim(scene);
+  int changed = 0;
+  int unchanged = 0;
+  for (int k = 0; k < 60 && (changed == 0 || unchanged == 0); ++k) {
+    sim.step();
+    const AdaptivityStats& st = sim.lastStep().adaptivity;
+    if (st.splits + st.merges > 0) {
+      ++changed;
+      EXPECT_FALSE(sim.neighborsValid()) << "step " << k;
+      EXPECT_TRUE(sim.fluidNeighbors().offsets.empty());
+    } else {
+      ++unchanged;
+      ASSERT_TRUE(sim.neighborsValid()) << "step " << k;
+      EXPECT_EQ(sim.fluidNeighbors().offsets.size(), sim.particles().size() + 1);
+    }
+  }
+  EXPECT_GT(changed, 0);
+  EXPECT_GT(unchanged, 0);
+}
+
 TEST(MetricsTest, HeightPercentileIsWeightedByMassSmall) {
   ParticleSet p;
   // 1000 equal particles at heights 0, 1, ..., 999 mm

@@ -24,7 +24,7 @@ std::string smallTank(const std::string& mode) {
     "name": "small tank", "mode": ")" +
                              mode + R"(",
     "domain": {"min": [-0.2, -0.05, -0.2], "max": [0.2, 0.5, 0.2]},
-    "parameters": {"particle_radius": 0.008},
+    "parameters": {"particle_radius": 0.008, "surface_distance_lo": 2.0, "surface_distance_hi": 12.0},
     "fluid": [{"min": [-0.1, 0.0, -0.1], "max": [0.1, 0.12, 0.1]}],
     "colliders": [{"name": "tank", "shape": "box", "container": true,
                    "half_extents": [0.1, 0.1, 0.1], "position": [0.0, 0.1, 0.0]}]
@@ -129,7 +129,7 @@ TEST(AppSessionTest, LiveLevelIntervalChangeMovesFineParticlesDeeper) {
   EditingPlatform platform;
   platform.editFrame = 20;
   platform.depth = 6.0 * r;
-  // settle with the default interval (fine only within about 2 r of the surface), then widen it to 10 r
+  // settle with the scene's interval (fine only within about 2 r of the surface), then widen it to 10 r
   runAppLoop(session, platform, 60);
   EXPECT_EQ(session.simulation().params().surfaceDistanceLo, 10.0);  // applied live, no rebuild
   EXPECT_FALSE(session.restartPending());
