@@ -966,7 +966,7 @@ XRAPI_ATTR XrResult XRAPI_CALL EndFrame(XrSession session, const XrFrameEndInfo*
         return XR_ERROR_SWAPCHAIN_RECT_INVALID;
       if (!poseValid(proj->views[v].pose))
         return XR_ERROR_POSE_INVALID;
-      if (captureFrame == s->frame)
+      if (captureFrame == g_stats.waited)
         captureImage(*sc, std::uint32_t(sc->released), sub.imageRect,
                      captureDir + "/eye" + std::to_string(v) + ".ppm");
       for (auto* next = reinterpret_cast<const XrBaseInStructure*>(proj->views[v].next); next;
