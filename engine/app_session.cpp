@@ -79,7 +79,8 @@ void AppSession::build() {
   scene.mode = m_mode;
   const input::HandModel model(m_config.handScale);
   const input::HandPose rest = restingHandPose(m_scene, model);
-  const input::HandDriver hand = input::HandDriver::attach(scene, model, rest);
+  const input::HandDriver hand =
+      m_config.hand ? input::HandDriver::attach(scene, model, rest) : input::HandDriver(model, 0);
   // tracked hands: parked above the water, 18 cm apart, until their first tracked frame
   sim::Aabb water;
   for (const sim::FluidBlock& b : m_scene.fluid)
@@ -336,6 +337,7 @@ void AppSession::startSteps(double wallDt, double budget) {
     m_targetTime += wallDt * timeScale;
     target = m_targetTime;
   }
+  target = std::min(target, m_endTime);
   // the frame's hand motion: from where the hand is to the new target at the frame's end
   if (!m_replay) {
     m_segment = input::PoseTrack();
@@ -365,7 +367,8 @@ void AppSession::runSteps(double target, double budget, bool oneStep) {
       // never ahead of the wall clock: stop when the next step would pass the target (fixed steps finish it)
       if (!fixedStep && !oneStep && simulation.time() + estimate > target + 1e-12)
         break;
-      m_hand.apply(simulation, motion, trackStart, estimate);
+      if (m_config.hand)
+        m_hand.apply(simulation, motion, trackStart, estimate);
       for (const TrackedHand& h : m_tracked)
         h.motion.apply(simulation, h.first, estimate);
       simulation.step();

@@ -3,13 +3,17 @@
 #include <tbb/global_control.h>
 #include <tbb/info.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <iomanip>
+#include <sstream>
 #include <stdexcept>
 
 #include "engine/cli_app.h"
 #include "render/fluid_renderer.h"
 #include "render/particle_colors.h"
+#include "render/render_settings.h"
 #include "sim/params.h"
 #include "sim/scene.h"
 
@@ -46,6 +50,17 @@ double parsePositive(const std::string& flag, const std::string& text) {
 }
 
 namespace {
+
+// a Choice entry of the render settings' table, checked against its names
+CLI::Validator tableChoice(const std::string& key) {
+  const std::vector<std::string>& names = render::RenderSettingsTable::get().at(key).choices;
+  std::string list;
+  for (std::size_t k = 0; k < names.size(); ++k)
+    list += (k ? k + 1 == names.size() ? " or " : ", " : "") + names[k];
+  return choiceOf(list, [&names](const std::string& v) {
+    return std::find(names.begin(), names.end(), v) != names.end();
+  });
+}
 
 // The declaration of fluidplaying's command line: every option once, with its type, range and help. Checks
 // that depend on the mode (window, headless, --render) follow the parse.
@@ -172,26 +187,29 @@ struct Declaration {
                              ->group(view_));
     }
     view = app.add_option("--view", o.view,
-                          "fluid (screen-space water, default) or particles (spheres coloured by --color)")
+                          "fluid (screen-space water, default) or particles (spheres coloured by --color); "
+                          "--set view=NAME")
                ->type_name("NAME")
-               ->check(choiceOf("fluid or particles",
-                                [](const std::string& v) { return v == "fluid" || v == "particles"; }))
+               ->check(tableChoice("view"))
                ->group(view_);
     viewOnly.push_back(view);
     color = app.add_option("--color", o.colorField,
                            "particle view colour: " + std::string(render::colorFieldNames()) +
-                               " (default nu); implies --view particles")
+                               " (default nu); implies --view particles; --set color_field=FIELD")
                 ->type_name("FIELD")
-                ->check(choiceOf(render::colorFieldNames(),
-                                 [](const std::string& c) { return bool(render::parseColorField(c)); }))
+                ->check(tableChoice("color_field"))
                 ->group(view_);
     viewOnly.push_back(color);
     viewOnly.push_back(
         line.addNumber(
-                "--highlight-time", [&o](double s) { o.highlightTime = s; }, 0.0, 1e6,
-                "tint split children red for S seconds after their split (default 0.5; 0: off)")
+                "--highlight-time", [&o](double s) { o.highlightTime = s; }, 0.0,
+                render::RenderSettingsTable::get().at("highlight_duration").max,
+                "tint split children red for S seconds after their split (default 0.5; 0: off); --set "
+                "highlight_duration=S")
             ->group(view_));
-    viewOnly.push_back(app.add_flag("--no-spray", o.noSpray, "do not draw splash particles")->group(view_));
+    viewOnly.push_back(
+        app.add_flag("--no-spray", o.noSpray, "do not draw splash particles; --set show_spray=false")
+            ->group(view_));
     viewOnly.push_back(app.add_option("--shaders", o.shaderDir,
                                       "GLSL folder (default: shaders/ here, else the source tree's)")
                            ->type_name("DIR")
@@ -218,6 +236,14 @@ CliOptions parseCommandLine(const std::vector<std::string>& args) {
   }
   if (o.render)
     o.headless = true;
+  // --set names a simulation parameter or a render setting: each goes to its own table
+  std::vector<std::string> sets;
+  for (const std::string& kv : o.sets)
+    (isRenderSetting(kv) ? o.renderSets : sets).push_back(kv);
+  o.sets = std::move(sets);
+  if (!o.renderSets.empty() && o.headless && !o.render)
+    throw std::invalid_argument("--set " + o.renderSets.front() +
+                                ": a render setting needs --render (or the window, without --headless)");
   auto firstGiven = [](const std::vector<CLI::Option*>& options) -> const CLI::Option* {
     for (const CLI::Option* option : options)
       if (option->count() > 0)
@@ -246,6 +272,29 @@ std::string applySetting(sim::SimParams& params, const std::string& keyValue) {
   return sim::ParamTable::sim().assign(params, keyValue);
 }
 
+bool isRenderSetting(const std::string& keyValue) {
+  const std::string key = keyValue.substr(0, keyValue.find('='));
+  return !sim::ParamTable::sim().find(key) && render::RenderSettingsTable::get().find(key);
+}
+
+std::string checkSetting(const std::string& keyValue) {
+  if (isRenderSetting(keyValue)) {
+    render::RenderSettings scratch;
+    return render::RenderSettingsTable::get().assign(scratch, keyValue);
+  }
+  sim::SimParams scratch;
+  std::string error = sim::ParamTable::sim().assign(scratch, keyValue);
+  const std::size_t eq = keyValue.find('=');
+  if (!error.empty() && eq != std::string::npos && eq > 0 &&
+      !sim::ParamTable::sim().find(keyValue.substr(0, eq))) {
+    // neither table knows the key: suggest the closest of either
+    const std::string render = render::RenderSettingsTable::get().unknownKey(keyValue.substr(0, eq));
+    if (error.find("did you mean") == std::string::npos && render.find("did you mean") != std::string::npos)
+      error = render;
+  }
+  return error;
+}
+
 void applySettings(sim::SimParams& params, const std::vector<std::string>& keyValues) {
   if (keyValues.empty())
     return;
@@ -268,18 +317,26 @@ void overrideScene(sim::SceneDesc& scene, const SceneOverrides& overrides) {
   applySettings(scene.params, overrides.sets);
 }
 
-void applyRenderOptions(const CliOptions& options, render::RenderSettings& s) {
-  if (options.view == "particles") {
-    s.view = render::RenderSettings::View::Particles;
-    if (!options.colorField.empty())
-      s.colorField = *render::parseColorField(options.colorField);
-  }
+void applyRenderOptions(const CliOptions& options, render::RenderSettings& settings) {
+  std::vector<std::string> sets;
+  if (options.view != "fluid")
+    sets.push_back("view=" + options.view);
+  if (!options.colorField.empty())
+    sets.push_back("color_field=" + options.colorField);
   if (options.highlightTime) {
-    s.highlightSplits = *options.highlightTime > 0.0;
-    if (s.highlightSplits)
-      s.highlightDuration = float(*options.highlightTime);
+    sets.push_back(*options.highlightTime > 0.0 ? "highlight_splits=true" : "highlight_splits=false");
+    if (*options.highlightTime > 0.0) {
+      std::ostringstream duration;
+      duration << std::setprecision(17) << *options.highlightTime;
+      sets.push_back("highlight_duration=" + duration.str());
+    }
   }
-  s.showSpray = !options.noSpray;
+  if (options.noSpray)
+    sets.push_back("show_spray=false");
+  sets.insert(sets.end(), options.renderSets.begin(), options.renderSets.end());
+  const std::string error = render::RenderSettingsTable::get().assignAll(settings, sets);
+  if (!error.empty())
+    throw std::invalid_argument("--set: " + error);
 }
 
 struct ThreadLimit::Control {

@@ -240,6 +240,7 @@ int runXrApp(const CliOptions& options, std::ostream& out) {
   GlxContext gl;
   xr.createSession(gl.binding());
   SessionConfig config = sessionConfigOf(options);
+  config.hand = false;  // the tracked hands take the mouse hand's place
   AppSession probe(config);  // the scene, for the tank's floor centre and the hands' resting pose
   sim::Aabb water;
   for (const sim::FluidBlock& b : probe.scene().fluid)
