@@ -131,28 +131,46 @@ class XrPlatform : public AppPlatform {
 
   bool running() override { return !m_exit; }
 
-  void input(AppSession& session, double) override {
+  FrameClock beginFrame() override {
     if (g_interrupted && !m_exitRequested) {
       m_xr.requestExit();
       m_exitRequested = true;
     }
     m_frameActive = false;
+    FrameClock idle;
+    idle.simulate = false;
+    idle.render = false;
     const XrLifecycle l = m_xr.pollEvents();
     if (l == XrLifecycle::Exit) {
       m_exit = true;
-      return;
+      return idle;
     }
     if (l == XrLifecycle::Recreate) {
-      m_xr.createSession(m_gl.binding());
-      ++m_recreated;
-      return;
+      idle.restart = true;
+      return idle;
     }
     if (l == XrLifecycle::Idle) {
       std::this_thread::sleep_for(std::chrono::milliseconds(5));  // nothing to show: do not spin
-      return;
+      return idle;
     }
+    // xrWaitFrame: the frame's time is the predicted display period; the last frame's steps run meanwhile
     m_timing = m_xr.beginFrame();
     m_frameActive = true;
+    FrameClock clock;
+    clock.dt = m_timing.period;
+    clock.simulate = true;
+    clock.render = true;  // draw() ends every begun frame, with no layer when the session is not visible
+    return clock;
+  }
+
+  void restart(AppSession&) override {
+    m_xr.createSession(m_gl.binding());
+    ++m_recreated;
+  }
+
+  void input(AppSession& session, const FrameClock&) override {
+    if (!m_frameActive)
+      return;
     if (!m_placed) {
       const auto [head, turn] = m_xr.headPose();
       m_placement.place(head, turn, m_xr.stageSpace());
@@ -240,7 +258,7 @@ int runXrApp(const CliOptions& options, std::ostream& out) {
   GlxContext gl;
   xr.createSession(gl.binding());
   SessionConfig config = sessionConfigOf(options);
-  config.hand = false;  // the tracked hands take the mouse hand's place
+  config.hand = false;       // the tracked hands take the mouse hand's place
   AppSession probe(config);  // the scene, for the tank's floor centre and the hands' resting pose
   sim::Aabb water;
   for (const sim::FluidBlock& b : probe.scene().fluid)
