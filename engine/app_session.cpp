@@ -81,6 +81,32 @@ void AppSession::build() {
   const input::HandPose rest = restingHandPose(m_scene, model);
   const input::HandDriver hand =
       m_config.hand ? input::HandDriver::attach(scene, model, rest) : input::HandDriver(model, 0);
+  // tracked hands: parked above the water, 18 cm apart, until their first tracked frame
+  sim::Aabb water;
+  for (const sim::FluidBlock& b : m_scene.fluid)
+    water.extend(b.box);
+  const double park = (water.isEmpty() ? m_scene.domain.max().y() : water.max().y()) + 0.03;
+  for (std::size_t k = 0; k < m_tracked.size(); ++k) {
+    TrackedHand& t = m_tracked[k];
+    input::HandPose pose = rest;
+    pose.position.z() += (t.side == input::HandSide::Left ? 0.09 : -0.09);
+    const input::HandJoints parked = input::jointsOfHandPose(input::HandModel(), pose, t.side);
+    // the tracked hand's own sizes, at the parked hand's pose
+    input::HandJoints placed = t.reference;
+    const sim::Quatd turn = parked.joint[0].orientation * t.reference.joint[0].orientation.conjugate();
+    for (input::JointPose& j : placed.joint) {
+      j.position = parked.joint[0].position + turn * (j.position - t.reference.joint[0].position);
+      j.orientation = (turn * j.orientation).normalized();
+    }
+    t.first = scene.colliders.size();
+    for (sim::ColliderDesc& c : input::jointHandColliders(placed, t.side))
+      scene.colliders.push_back(std::move(c));
+    t.parts = input::partPosesFromJoints(placed);
+    t.target = t.parts;
+    t.motion.set(t.parts, t.parts, 0.0, 1.0);
+    // a lost hand rises until its lowest part is 3 cm above the water, at 1 m/s
+    t.presence = input::HandPresence(park, 1.0);
+  }
   // built aside first: a scene that fails to build leaves the running simulation as it was
   auto simulation = std::make_unique<sim::Simulation>(scene);
   m_restPose = rest;
@@ -107,6 +133,28 @@ void AppSession::build() {
   m_handScalePending = false;
   m_error.clear();
   m_lastFinish = Clock::now();
+}
+
+void AppSession::setTrackedHands(
+    const std::vector<std::pair<input::HandSide, input::HandJoints>>& references) {
+  m_tracked.clear();
+  for (const auto& [side, joints] : references) {
+    TrackedHand t;
+    t.side = side;
+    t.reference = joints;
+    m_tracked.push_back(t);
+  }
+}
+
+void AppSession::setTrackedHandTarget(
+    std::size_t k, const std::optional<std::array<input::PartPose, input::HandModel::kParts>>& parts,
+    double frameDt) {
+  TrackedHand& t = m_tracked.at(k);
+  if (!t.presence.placed() && !parts)
+    return;  // parked until first seen
+  if (!t.presence.placed())
+    t.presence.park(t.parts);  // the first sight: eased to from the parked pose, never jumped to
+  t.target = t.presence.update(parts, frameDt);
 }
 
 void AppSession::setHandScale(double scale) {
@@ -189,6 +237,8 @@ void AppSession::finishSteps() {
     m_handPose = input::handPoseOf(m_replay->sample(t - m_replayStart));
   else if (!m_segment.keys().empty())
     m_handPose = input::handPoseOf(m_segment.sample(t));
+  for (TrackedHand& h : m_tracked)
+    h.parts = h.motion.sample(t);
   if (m_recording && t - m_recordStart > m_recording->duration())
     m_recording->add(input::poseSampleOf(t - m_recordStart, m_handPose));
   if (!ran || frameWall <= 0.0)
@@ -292,6 +342,8 @@ void AppSession::startSteps(double wallDt, double budget) {
     m_segment = input::PoseTrack();
     m_segment.add(input::poseSampleOf(t0, m_handPose));
     m_targetTime = t0;
+    for (TrackedHand& h : m_tracked)
+      h.motion.set(h.parts, h.parts, t0, t0 + 1.0);
     m_running = true;
     return;
   }
@@ -320,6 +372,10 @@ void AppSession::startSteps(double wallDt, double budget) {
     if (tEnd > t0)
       m_segment.add(input::poseSampleOf(tEnd, m_handTarget));
   }
+  for (TrackedHand& h : m_tracked) {
+    const double tEnd = std::isfinite(target) ? target : t0 + simulation.params().dtMax;
+    h.motion.set(h.parts, h.target, t0, tEnd);
+  }
   m_running = true;
   const double stepBudget = oneStep || fixedStep ? std::numeric_limits<double>::infinity() : budget;
   m_task.run([this, target, stepBudget, oneStep] { runSteps(target, stepBudget, oneStep); });
@@ -339,6 +395,8 @@ void AppSession::runSteps(double target, double budget, bool oneStep) {
         break;
       if (m_config.hand)
         m_hand.apply(simulation, motion, trackStart, estimate);
+      for (const TrackedHand& h : m_tracked)
+        h.motion.apply(simulation, h.first, estimate);
       simulation.step();
       ++m_taskSteps;
       if (oneStep || seconds(Clock::now() - start) > budget)

@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "input/hand_driver.h"
+#include "input/joint_hand.h"
 #include "input/mouse_hand.h"
 #include "input/pose_track.h"
 #include "sim/simulation.h"
@@ -160,6 +161,24 @@ class AppSession {
   /// at the end of the coming frame's steps
   void setHandTarget(const input::HandPose& pose) { m_handTarget = pose; }
 
+  // ---- tracked hands (headset, joint recordings): any number, each driven part by part ----
+  /// Tracked hands attached at the next build (and rebuilt with every reset), one per entry: its colliders
+  /// are sized from the entry's joints (input::jointHandColliders) and start parked above the water.
+  void setTrackedHands(const std::vector<std::pair<input::HandSide, input::HandJoints>>& references);
+  /// number of tracked hands
+  std::size_t trackedHandCount() const { return m_tracked.size(); }
+  /// Where tracked hand k's parts are at the end of the coming frame's steps; nothing: tracking lost (the
+  /// hand eases out of the water and back, input::HandPresence). Call between frames.
+  void setTrackedHandTarget(std::size_t k,
+                            const std::optional<std::array<input::PartPose, input::HandModel::kParts>>& parts,
+                            double frameDt);
+  /// tracked hand k's parts now
+  const std::array<input::PartPose, input::HandModel::kParts>& trackedHandParts(std::size_t k) const {
+    return m_tracked[k].parts;
+  }
+  /// index of tracked hand k's first collider in the simulation
+  std::size_t trackedHandFirstCollider(std::size_t k) const { return m_tracked[k].first; }
+
   /// the mean real-time factor since construction or the last reset (simulated / wall time)
   double meanRealTimeFactor() const;
 
@@ -188,6 +207,17 @@ class AppSession {
   bool m_handScalePending = false;
   std::string m_error;
   SessionStats m_stats;
+
+  struct TrackedHand {
+    input::HandSide side = input::HandSide::Right;
+    input::HandJoints reference;
+    std::size_t first = 0;
+    std::array<input::PartPose, input::HandModel::kParts> parts{};   // now
+    std::array<input::PartPose, input::HandModel::kParts> target{};  // at the end of the frame's steps
+    input::PartMotion motion;
+    input::HandPresence presence{0.0, 1.0};
+  };
+  std::vector<TrackedHand> m_tracked;
 
   tbb::task_group m_task;
   bool m_running = false;

@@ -145,6 +145,19 @@ struct Declaration {
     windowOnly.push_back(
         app.add_flag("--no-panel", o.noPanel, "start with the panel hidden (Tab toggles)")->group(window));
 
+    app.add_flag(
+           "--xr", o.xr,
+           "play in an OpenXR headset (docs/xr.md); without a runtime, headset or GL support it says so in "
+           "one line and opens the window instead")
+        ->group(app_);
+    app.add_flag("--xr-required", o.xrRequired,
+                 "like --xr, but exit with code 5 when the headset cannot be used")
+        ->group(app_);
+    app.add_flag("--no-window", o.noWindow, "with --xr: no mirror window")->group(app_);
+    app.add_option("--record-hands", o.recordHands, "with --xr: record the tracked hands as a joint CSV")
+        ->type_name("FILE")
+        ->group(app_);
+
     app.add_option("--stats", o.statsPath, "write the run's statistics as JSON")
         ->type_name("FILE.json")
         ->group(headless);

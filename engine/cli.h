@@ -20,9 +20,10 @@ namespace fp::engine {
 /// Exit codes of `fluidplaying`.
 enum ExitCode : int {
   kExitOk = 0,
-  kExitUsage = 2,     ///< bad command line
-  kExitInput = 3,     ///< bad scene or asset, unwritable output
-  kExitUnstable = 4,  ///< the simulation went unstable
+  kExitUsage = 2,      ///< bad command line
+  kExitInput = 3,      ///< bad scene or asset, unwritable output
+  kExitUnstable = 4,   ///< the simulation went unstable
+  kExitNoHeadset = 5,  ///< --xr-required and no OpenXR runtime, headset or GL support
 };
 
 /// Parsed command-line options.
@@ -61,6 +62,11 @@ struct CliOptions {
   bool fullscreen = false;  ///< --fullscreen (window)
   bool noPanel = false;     ///< --no-panel: start with the panel hidden (window)
   bool sizeGiven = false;   ///< --width or --height was given
+  // the headset (OpenXR)
+  bool xr = false;          ///< --xr: play in an OpenXR headset
+  bool xrRequired = false;  ///< --xr-required: like --xr, exit with kExitNoHeadset when it cannot be used
+  bool noWindow = false;    ///< --no-window: no mirror window in the headset mode
+  std::string recordHands;  ///< --record-hands FILE: the tracked hands as a joint CSV
 };
 
 /// A finite number, the whole of `text`; throws std::invalid_argument naming `flag` otherwise.

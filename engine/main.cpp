@@ -15,6 +15,10 @@
 #include "engine/headless_render.h"
 #include "engine/headless_runner.h"
 #include "render/render_error.h"
+#ifdef FP_HAVE_XR
+#include "engine/xr_app.h"
+#include "engine/xr_program.h"
+#endif
 
 namespace {
 
@@ -92,6 +96,25 @@ int main(int argc, char** argv) {
   }
   const ThreadLimit threads(options.threads);  // one limit for the window and the headless modes
   try {
+    if (options.xr || options.xrRequired) {
+#ifdef FP_HAVE_XR
+      try {
+        return runXrApp(options, std::cout);
+      } catch (const XrUnavailable& e) {
+        if (options.xrRequired) {
+          std::cerr << "fluidplaying: " << e.what() << " (--xr-required)\n";
+          return kExitNoHeadset;
+        }
+        std::cerr << "fluidplaying: " << e.what() << "; playing on the desktop instead\n";
+      }
+#else
+      if (options.xrRequired) {
+        std::cerr << "fluidplaying: built without OpenXR (--xr-required)\n";
+        return kExitNoHeadset;
+      }
+      std::cerr << "fluidplaying: built without OpenXR; playing on the desktop instead\n";
+#endif
+    }
     if (!options.headless) {
       try {
         return runWindow(options);

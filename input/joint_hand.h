@@ -114,6 +114,12 @@ class HandPresence {
   /// first call with parts places the hand there at once
   const std::array<PartPose, HandModel::kParts>& update(
       const std::optional<std::array<PartPose, HandModel::kParts>>& tracked, double dt);
+  /// places the hand at `parts` without following: the next tracked frame is eased to, not jumped to
+  void park(const std::array<PartPose, HandModel::kParts>& parts) {
+    m_parts = parts;
+    m_placed = true;
+    m_following = false;
+  }
   /// the current parts
   const std::array<PartPose, HandModel::kParts>& parts() const { return m_parts; }
   /// true while the parts follow the tracked hand exactly (false while lost or easing back)

@@ -353,14 +353,14 @@ void queueStop(Instance& inst, std::uint64_t sh, Session& s) {
     queueState(inst, sh, XR_SESSION_STATE_STOPPING);
 }
 
-/// the scripted events of frame `frame` ("FRAME:COMMAND,..."): loss_pending, exit, lost_left, lost_right,
-/// track_left, track_right, menu
+/// the scripted events of the frame just waited for ("FRAME:COMMAND,...", frames counted from 1 over all
+/// sessions of the process): loss_pending, exit, lost_left, lost_right, track_left, track_right, menu
 void runEvents(Instance& inst, std::uint64_t sh, Session& s) {
   std::stringstream in(g_config->events);
   std::string item;
   while (std::getline(in, item, ',')) {
     const std::size_t colon = item.find(':');
-    if (colon == std::string::npos || std::atoll(item.substr(0, colon).c_str()) != s.frame)
+    if (colon == std::string::npos || std::atol(item.substr(0, colon).c_str()) != g_stats.waited)
       continue;
     const std::string cmd = item.substr(colon + 1);
     if (cmd == "loss_pending")
@@ -966,7 +966,7 @@ XRAPI_ATTR XrResult XRAPI_CALL EndFrame(XrSession session, const XrFrameEndInfo*
         return XR_ERROR_SWAPCHAIN_RECT_INVALID;
       if (!poseValid(proj->views[v].pose))
         return XR_ERROR_POSE_INVALID;
-      if (captureFrame == s->frame)
+      if (captureFrame == g_stats.waited)
         captureImage(*sc, std::uint32_t(sc->released), sub.imageRect,
                      captureDir + "/eye" + std::to_string(v) + ".ppm");
       for (auto* next = reinterpret_cast<const XrBaseInStructure*>(proj->views[v].next); next;
