@@ -124,8 +124,9 @@ void expectRefused(const std::string& bytes, sim::Simulation& target, const char
   } catch (const sim::StateError& e) {
     const std::string what = e.what();
     EXPECT_EQ(what.find('\n'), std::string::npos) << what;
-    if (expected)
+    if (expected) {
       EXPECT_NE(what.find(expected), std::string::npos) << what;
+    }
   }
   EXPECT_EQ(target.stepCount(), steps);
   EXPECT_EQ(target.particles().size(), n);
