@@ -578,12 +578,18 @@ void saveState(const std::string& path, const Simulation& sim, const std::vector
 }
 
 std::vector<double> loadState(const std::string& path, Simulation& sim) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in)
-    throw StateError(path + ": cannot read the state file");
-  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (in.bad())
-    throw StateError(path + ": reading the state file failed");
+  std::string bytes;
+  try {
+    std::ifstream in(path, std::ios::binary);
+    if (!in)
+      throw StateError(path + ": cannot read the state file");
+    bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    if (in.bad())
+      throw StateError(path + ": reading the state file failed");
+  } catch (const std::ios_base::failure& e) {
+    // libstdc++ throws from the stream buffer for a folder (EISDIR) even without exceptions() set
+    throw StateError(path + ": cannot read the state file (" + e.code().message() + ")");
+  }
   try {
     return decodeState(bytes, sim);
   } catch (const StateError& e) {
