@@ -4,6 +4,7 @@
 #include <cmath>
 #include <filesystem>
 
+#include "engine/cli.h"
 #include "engine/scene_loader.h"
 
 namespace fp::engine {
@@ -60,14 +61,7 @@ AppSession::AppSession(const SessionConfig& config) : m_config(config) {
   fixedStep = config.fixedStep;
   timeScale = std::clamp(config.timeScale, 0.01, 4.0);
   m_scene = loadScene(config.scenePath);
-  if (config.seed)
-    m_scene.params.seed = *config.seed;
-  if (!config.mode.empty()) {
-    const auto mode = sim::parseMode(config.mode);
-    if (!mode)
-      throw sim::InputError("unknown mode '" + config.mode + "' (expected " + sim::modeNames() + ")");
-    m_scene.mode = *mode;
-  }
+  overrideScene(m_scene, {config.mode, config.seed, config.sets});
   m_params = m_scene.params;
   m_mode = m_scene.mode;
   if (!config.handScript.empty())
@@ -246,14 +240,9 @@ void AppSession::applyRequests() {
   for (const sim::ParamInfo& info : sim::ParamTable::sim().entries()) {
     if (info.live)
       continue;
-    if (info.kind == sim::ParamKind::Vector3) {
-      if (sim::ParamTable::getVec3(next, info) != sim::ParamTable::getVec3(m_sim->params(), info)) {
-        pending = true;
-        sim::ParamTable::setVec3(next, info, sim::ParamTable::getVec3(m_sim->params(), info));
-      }
-    } else if (sim::ParamTable::getScalar(next, info) != sim::ParamTable::getScalar(m_sim->params(), info)) {
+    if (!sim::ParamTable::equal(info, next, m_sim->params())) {
       pending = true;
-      sim::ParamTable::setScalar(next, info, sim::ParamTable::getScalar(m_sim->params(), info));
+      sim::ParamTable::copy(info, m_sim->params(), next);
     }
   }
   m_sim->params() = next;

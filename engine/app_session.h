@@ -30,6 +30,7 @@ struct SessionConfig {
   std::string scenePath;              ///< scene JSON
   std::string mode;                   ///< resolution mode override (empty: the scene's)
   std::optional<std::uint64_t> seed;  ///< seed override
+  std::vector<std::string> sets;      ///< "KEY=VALUE" parameter settings over the scene's, in order
   std::string handScript;             ///< pose-track CSV replayed from simulated time 0 (empty: mouse)
   bool fixedStep = false;             ///< every frame advances exactly 1 / frame_rate of simulated time
   double timeScale = 1.0;             ///< simulated seconds per wall second wanted, in (0, 4]
@@ -82,7 +83,8 @@ struct SessionRequests {
 /// The session. Not copyable; one per app.
 class AppSession {
  public:
-  /// Loads the scene, attaches the hand above the water and builds the simulation. Throws sim::InputError.
+  /// Loads the scene, attaches the hand above the water and builds the simulation. Throws sim::InputError,
+  /// std::invalid_argument for a bad mode or setting.
   explicit AppSession(const SessionConfig& config);
   ~AppSession();
   AppSession(const AppSession&) = delete;

@@ -1,10 +1,16 @@
 #include "engine/cli.h"
 
+#include <tbb/global_control.h>
+#include <tbb/info.h>
+
 #include <cmath>
 #include <filesystem>
 #include <stdexcept>
 
+#include "engine/cli_app.h"
+#include "render/fluid_renderer.h"
 #include "render/particle_colors.h"
+#include "sim/params.h"
 #include "sim/scene.h"
 
 namespace fp::engine {
@@ -39,185 +45,182 @@ double parsePositive(const std::string& flag, const std::string& text) {
   return value;
 }
 
+namespace {
+
+// The declaration of fluidplaying's command line: every option once, with its type, range and help. Checks
+// that depend on the mode (window, headless, --render) follow the parse.
+struct Declaration {
+  CommandLine line{
+      "fluidplaying",
+      "fluidplaying: real-time adaptive SPH water. Without --headless it opens the window (water, "
+      "mouse hand, panel; F1 lists the controls); without a display it says so in one line and "
+      "runs headless instead. --headless runs a scene without a window, or the app loop in "
+      "fixed frame steps when a recorded hand is replayed (--hand-script)."};
+  CLI::Option* frames = nullptr;
+  CLI::Option* simTime = nullptr;
+  CLI::Option* render = nullptr;
+  CLI::Option* out = nullptr;
+  CLI::Option* view = nullptr;
+  CLI::Option* color = nullptr;
+  std::vector<CLI::Option*> viewOnly;    // options of a view: --render or the window
+  std::vector<CLI::Option*> windowOnly;  // options of the window
+
+  explicit Declaration(CliOptions& o) {
+    CLI::App& app = line.app();
+    const std::string run = "Run", app_ = "App (window, and the headless hand replay)", view_ = "View",
+                      window = "Window", headless = "Headless";
+    app.get_help_ptr()->group(run);
+    app.add_flag("--headless", o.headless, "run without a window")->group(run);
+    app.add_option("--scene", o.scenePath,
+                   "scene JSON (default assets/scenes/hand_tank.json in the window, dam_break.json headless)")
+        ->type_name("FILE")
+        ->group(run);
+    app.add_option("--mode", o.mode,
+                   "resolution mode: " + std::string(sim::modeNames()) + " (default: the scene's)")
+        ->type_name("NAME")
+        ->check(choiceOf(sim::modeNames(), [](const std::string& m) { return bool(sim::parseMode(m)); }))
+        ->group(run);
+    frames = line.addInteger(
+                     "--frames", [&o](long long n) { o.frames = int(n); }, 1, 100000000,
+                     "headless: simulate N frames at the scene's frame rate; window: quit after N frames")
+                 ->group(run);
+    simTime = line.addPositive(
+                      "--sim-time", [&o](double s) { o.simTime = s; },
+                      "headless: simulate S seconds (default: the scene's sim_time)")
+                  ->group(run)
+                  ->excludes(frames);
+    line.addInteger(
+            "--threads", [&o](long long n) { o.threads = int(n); }, 1, 1024,
+            "worker threads (default: all cores)")
+        ->group(run);
+    line.addSeed([&o](std::uint64_t s) { o.seed = s; })->group(run);
+    line.addSet(o.sets)->group(run);
+    app.add_flag("--quiet", o.quiet, "no progress lines")->group(run);
+
+    app.add_option(
+           "--hand-script", o.handScript,
+           "replay a recorded hand (assets/hands/*.csv) from time 0; headless it runs the app loop in "
+           "fixed frame steps")
+        ->type_name("FILE")
+        ->group(app_);
+    line.addNumber(
+            "--hand-size", [&o](double s) { o.handScale = s; }, 0.5, 3.0,
+            "hand scale factor (default 1: an adult hand)")
+        ->group(app_);
+
+    windowOnly.push_back(app.add_flag("--fixed-step", o.fixedStep,
+                                      "every frame advances 1/frame_rate of simulated time, however long it "
+                                      "takes (videos, tests); default: real time, slowed when the machine "
+                                      "cannot keep up")
+                             ->group(window));
+    windowOnly.push_back(line.addNumber(
+                                 "--time-scale", [&o](double s) { o.timeScale = s; }, 0.05, 4.0,
+                                 "simulated seconds per wall second (default 1)")
+                             ->group(window));
+    windowOnly.push_back(
+        app.add_option("--screenshot", o.screenshot, "write the last frame, panel included, as PNG")
+            ->type_name("FILE.png")
+            ->group(window));
+    windowOnly.push_back(
+        app.add_option("--record-frames", o.recordDir, "write every frame's view as DIR/frame_NNNNN.png")
+            ->type_name("DIR")
+            ->group(window));
+    windowOnly.push_back(
+        app.add_flag("--fullscreen", o.fullscreen, "start full screen (F11 toggles)")->group(window));
+    windowOnly.push_back(
+        app.add_flag("--no-panel", o.noPanel, "start with the panel hidden (Tab toggles)")->group(window));
+
+    app.add_option("--stats", o.statsPath, "write the run's statistics as JSON")
+        ->type_name("FILE.json")
+        ->group(headless);
+    app.add_option("--export", o.exportDir, "write the particles of every frame as binary PLY into DIR")
+        ->type_name("DIR")
+        ->group(headless);
+    render = app.add_flag("--render", o.render,
+                          "render every frame (frame 0 is the initial state) offscreen through OSMesa, no "
+                          "display needed, and write DIR/frame_NNNNN.png; implies --headless")
+                 ->group(headless);
+    out = app.add_option("--out", o.outDir, "folder of the images (required with --render)")
+              ->type_name("DIR")
+              ->group(headless)
+              ->needs(render);
+
+    for (const char* side : {"--width", "--height"}) {
+      int& target = std::string(side) == "--width" ? o.width : o.height;
+      viewOnly.push_back(line.addInteger(
+                                 side,
+                                 [&o, &target](long long n) {
+                                   target = int(n);
+                                   o.sizeGiven = true;
+                                 },
+                                 16, 8192,
+                                 std::string("image or window ") + (side[2] == 'w' ? "width" : "height") +
+                                     " in pixels (default " + (side[2] == 'w' ? "1280" : "720") + ")")
+                             ->group(view_));
+    }
+    view = app.add_option("--view", o.view,
+                          "fluid (screen-space water, default) or particles (spheres coloured by --color)")
+               ->type_name("NAME")
+               ->check(choiceOf("fluid or particles",
+                                [](const std::string& v) { return v == "fluid" || v == "particles"; }))
+               ->group(view_);
+    viewOnly.push_back(view);
+    color = app.add_option("--color", o.colorField,
+                           "particle view colour: " + std::string(render::colorFieldNames()) +
+                               " (default nu); implies --view particles")
+                ->type_name("FIELD")
+                ->check(choiceOf(render::colorFieldNames(),
+                                 [](const std::string& c) { return bool(render::parseColorField(c)); }))
+                ->group(view_);
+    viewOnly.push_back(color);
+    viewOnly.push_back(
+        line.addNumber(
+                "--highlight-time", [&o](double s) { o.highlightTime = s; }, 0.0, 1e6,
+                "tint split children red for S seconds after their split (default 0.5; 0: off)")
+            ->group(view_));
+    viewOnly.push_back(app.add_flag("--no-spray", o.noSpray, "do not draw splash particles")->group(view_));
+    viewOnly.push_back(app.add_option("--shaders", o.shaderDir,
+                                      "GLSL folder (default: shaders/ here, else the source tree's)")
+                           ->type_name("DIR")
+                           ->group(view_));
+    app.footer(
+        "Exit codes: 0 ok, 2 bad command line, 3 bad scene, hand script, output or shader, 4 simulation "
+        "unstable.");
+  }
+};
+
+}  // namespace
+
 std::string usage() {
-  return "usage: fluidplaying [--scene FILE] [--mode NAME] [--hand-script FILE] [--frames N] [--screenshot "
-         "FILE.png]\n"
-         "                    [--record-frames DIR] [--fixed-step] [--time-scale S] [--hand-size S] "
-         "[--fullscreen]\n"
-         "                    [--no-panel] [--width W] [--height H] [--threads T] [--seed N] [view options]\n"
-         "       fluidplaying --headless [--scene FILE] [--frames N | --sim-time S] [--threads T] [--seed "
-         "N]\n"
-         "                    [--mode NAME] [--hand-script FILE] [--stats FILE.json] [--export DIR] "
-         "[--quiet]\n"
-         "                    [--render --out DIR [--width W] [--height H] [view options]]\n"
-         "  view options: [--view fluid|particles] [--color FIELD] [--highlight-time S] [--no-spray] "
-         "[--shaders "
-         "DIR]\n"
-         "  (no --headless)  open the window: real-time water, mouse hand, panel (F1: controls); without a\n"
-         "                  display it says so in one line and runs headless instead\n"
-         "  --headless      run without a window\n"
-         "  --scene FILE    scene JSON (default assets/scenes/hand_tank.json in the window, dam_break.json\n"
-         "                  headless)\n"
-         "  --frames N      headless: simulate N frames at the scene's frame rate; window: quit after N "
-         "frames\n"
-         "  --sim-time S    simulate S seconds (default: the scene's sim_time; headless)\n"
-         "  --threads T     worker threads (default: all cores)\n"
-         "  --seed N        seed of every random choice (overrides the scene)\n"
-         "  --mode NAME     resolution: uniform-low, uniform-high, surface or fluidplaying (default: the "
-         "scene's)\n"
-         "  --hand-script FILE  replay a recorded hand (assets/hands/*.csv) from time 0; headless it runs "
-         "the\n"
-         "                  app loop in fixed frame steps\n"
-         "  --hand-size S   hand scale factor in [0.5, 3] (default 1: an adult hand)\n"
-         "  --fixed-step    window: every frame advances 1/frame_rate of simulated time, however long it "
-         "takes\n"
-         "                  (videos, tests); default: real time, slowed when the machine cannot keep up\n"
-         "  --time-scale S  window: simulated seconds per wall second, in [0.05, 4] (default 1)\n"
-         "  --screenshot FILE  window: write the last frame, panel included, as PNG\n"
-         "  --record-frames DIR  window: write every frame's view as DIR/frame_NNNNN.png\n"
-         "  --fullscreen    window: start full screen (F11 toggles)\n"
-         "  --no-panel      window: start with the panel hidden (Tab toggles)\n"
-         "  --stats FILE    write the run's statistics as JSON (headless)\n"
-         "  --export DIR    write the particles of every frame as binary PLY into DIR (headless)\n"
-         "  --quiet         no progress lines\n"
-         "  --render        render every frame (frame 0 is the initial state) offscreen through OSMesa, no\n"
-         "                  display needed, and write DIR/frame_NNNNN.png; implies --headless\n"
-         "  --out DIR       folder of the images (required with --render)\n"
-         "  --width W       image or window width in pixels (default 1280)\n"
-         "  --height H      image or window height in pixels (default 720)\n"
-         "  --view NAME     fluid (screen-space water, default) or particles (spheres coloured by --color)\n"
-         "  --color FIELD   particle view colour: mass, phi, omega, nu, speed or density-error (default nu)\n"
-         "  --highlight-time S  tint split children red for S seconds after their split (default 0.5; 0: "
-         "off)\n"
-         "  --no-spray      do not draw splash particles\n"
-         "  --shaders DIR   GLSL folder (default: shaders/ here, else the source tree's)\n"
-         "exit codes: 0 ok, 2 bad command line, 3 bad scene, hand script, output or shader, 4 simulation "
-         "unstable\n";
+  CliOptions o;
+  return Declaration(o).line.help();
 }
 
 CliOptions parseCommandLine(const std::vector<std::string>& args) {
   CliOptions o;
-  std::vector<std::string> renderOnly;  // options that mean nothing without --render
-  std::vector<std::string> viewOnly;    // options of a view: --render or the window
-  std::vector<std::string> windowOnly;  // options of the window
-  bool colorGiven = false;
-  bool viewGiven = false;
-  for (std::size_t k = 0; k < args.size(); ++k) {
-    const std::string& a = args[k];
-    auto value = [&]() -> const std::string& {
-      if (k + 1 >= args.size())
-        throw std::invalid_argument(a + " needs a value");
-      return args[++k];
-    };
-    if (a == "--help" || a == "-h") {
-      o.help = true;
-    } else if (a == "--headless") {
-      o.headless = true;
-    } else if (a == "--quiet") {
-      o.quiet = true;
-    } else if (a == "--scene") {
-      o.scenePath = value();
-    } else if (a == "--frames") {
-      o.frames = int(parseInteger(a, value(), 1, 100000000));
-    } else if (a == "--sim-time") {
-      const double s = parseNumber(a, value());
-      if (s <= 0.0)
-        throw std::invalid_argument("--sim-time must be positive");
-      o.simTime = s;
-    } else if (a == "--threads") {
-      o.threads = int(parseInteger(a, value(), 1, 1024));
-    } else if (a == "--seed") {
-      o.seed = std::uint64_t(parseInteger(a, value(), 0, 4294967295LL));
-    } else if (a == "--stats") {
-      o.statsPath = value();
-    } else if (a == "--mode") {
-      o.mode = value();
-      if (!sim::parseMode(o.mode)) {
-        throw std::invalid_argument("--mode expects one of " + std::string(sim::modeNames()) + ", got '" +
-                                    o.mode + "'");
-      }
-    } else if (a == "--export") {
-      o.exportDir = value();
-    } else if (a == "--render") {
-      o.render = true;
-      o.headless = true;
-    } else if (a == "--out") {
-      o.outDir = value();
-      renderOnly.push_back(a);
-    } else if (a == "--width" || a == "--height") {
-      (a == "--width" ? o.width : o.height) = int(parseInteger(a, value(), 16, 8192));
-      o.sizeGiven = true;
-      viewOnly.push_back(a);
-    } else if (a == "--view") {
-      o.view = value();
-      if (o.view != "fluid" && o.view != "particles")
-        throw std::invalid_argument("--view expects fluid or particles, got '" + o.view + "'");
-      viewGiven = true;
-      viewOnly.push_back(a);
-    } else if (a == "--color") {
-      o.colorField = value();
-      if (!render::parseColorField(o.colorField)) {
-        throw std::invalid_argument("--color expects one of " + std::string(render::colorFieldNames()) +
-                                    ", got '" + o.colorField + "'");
-      }
-      colorGiven = true;
-      viewOnly.push_back(a);
-    } else if (a == "--highlight-time") {
-      const double s = parseNumber(a, value());
-      if (s < 0.0)
-        throw std::invalid_argument("--highlight-time must be >= 0");
-      o.highlightTime = s;
-      viewOnly.push_back(a);
-    } else if (a == "--no-spray") {
-      o.noSpray = true;
-      viewOnly.push_back(a);
-    } else if (a == "--shaders") {
-      o.shaderDir = value();
-      viewOnly.push_back(a);
-    } else if (a == "--hand-script") {
-      o.handScript = value();
-    } else if (a == "--hand-size") {
-      o.handScale = parseNumber(a, value());
-      if (o.handScale < 0.5 || o.handScale > 3.0)
-        throw std::invalid_argument("--hand-size expects a number in [0.5, 3]");
-    } else if (a == "--fixed-step") {
-      o.fixedStep = true;
-      windowOnly.push_back(a);
-    } else if (a == "--time-scale") {
-      o.timeScale = parseNumber(a, value());
-      if (o.timeScale < 0.05 || o.timeScale > 4.0)
-        throw std::invalid_argument("--time-scale expects a number in [0.05, 4]");
-      windowOnly.push_back(a);
-    } else if (a == "--screenshot") {
-      o.screenshot = value();
-      windowOnly.push_back(a);
-    } else if (a == "--record-frames") {
-      o.recordDir = value();
-      windowOnly.push_back(a);
-    } else if (a == "--fullscreen") {
-      o.fullscreen = true;
-      windowOnly.push_back(a);
-    } else if (a == "--no-panel") {
-      o.noPanel = true;
-      windowOnly.push_back(a);
-    } else {
-      throw std::invalid_argument("unknown option '" + a + "'");
-    }
+  Declaration d(o);
+  if (!d.line.parse(args)) {
+    o.help = true;
+    return o;
   }
-  if (o.frames && o.simTime)
-    throw std::invalid_argument("--frames and --sim-time exclude each other");
-  if (!o.render && !renderOnly.empty())
-    throw std::invalid_argument(renderOnly.front() + " needs --render");
-  if (o.headless && !o.render && !viewOnly.empty())
-    throw std::invalid_argument(viewOnly.front() + " needs --render (or the window, without --headless)");
-  if (o.headless && !windowOnly.empty())
-    throw std::invalid_argument(windowOnly.front() + " applies to the window, not --headless");
+  if (o.render)
+    o.headless = true;
+  auto firstGiven = [](const std::vector<CLI::Option*>& options) -> const CLI::Option* {
+    for (const CLI::Option* option : options)
+      if (option->count() > 0)
+        return option;
+    return nullptr;
+  };
+  if (const CLI::Option* v = firstGiven(d.viewOnly); v && o.headless && !o.render)
+    throw std::invalid_argument(v->get_name() + " needs --render (or the window, without --headless)");
+  if (const CLI::Option* w = firstGiven(d.windowOnly); w && o.headless)
+    throw std::invalid_argument(w->get_name() + " applies to the window, not --headless");
   if (!o.headless && o.simTime)
     throw std::invalid_argument("--sim-time needs --headless (the window runs until closed or --frames)");
   if (o.render && o.outDir.empty())
     throw std::invalid_argument("--render needs --out DIR");
-  if (colorGiven) {
-    if (viewGiven && o.view == "fluid")
+  if (d.color->count() > 0) {
+    if (d.view->count() > 0 && o.view == "fluid")
       throw std::invalid_argument("--color applies to --view particles, not --view fluid");
     o.view = "particles";
   }
@@ -225,6 +228,57 @@ CliOptions parseCommandLine(const std::vector<std::string>& args) {
     o.scenePath = o.headless ? defaultScenePath() : defaultAppScenePath();
   return o;
 }
+
+std::string applySetting(sim::SimParams& params, const std::string& keyValue) {
+  return sim::ParamTable::sim().assign(params, keyValue);
+}
+
+void applySettings(sim::SimParams& params, const std::vector<std::string>& keyValues) {
+  if (keyValues.empty())
+    return;
+  const std::string error = sim::ParamTable::sim().assignAll(params, keyValues);
+  if (!error.empty())
+    throw std::invalid_argument("--set: " + error);
+}
+
+void overrideScene(sim::SceneDesc& scene, const SceneOverrides& overrides) {
+  if (!overrides.mode.empty()) {
+    const auto mode = sim::parseMode(overrides.mode);
+    if (!mode) {
+      throw std::invalid_argument("--mode expects one of " + std::string(sim::modeNames()) + ", got '" +
+                                  overrides.mode + "'");
+    }
+    scene.mode = *mode;
+  }
+  if (overrides.seed)
+    scene.params.seed = *overrides.seed;
+  applySettings(scene.params, overrides.sets);
+}
+
+void applyRenderOptions(const CliOptions& options, render::RenderSettings& s) {
+  if (options.view == "particles") {
+    s.view = render::RenderSettings::View::Particles;
+    if (!options.colorField.empty())
+      s.colorField = *render::parseColorField(options.colorField);
+  }
+  if (options.highlightTime) {
+    s.highlightSplits = *options.highlightTime > 0.0;
+    if (s.highlightSplits)
+      s.highlightDuration = float(*options.highlightTime);
+  }
+  s.showSpray = !options.noSpray;
+}
+
+struct ThreadLimit::Control {
+  explicit Control(int count) : control(tbb::global_control::max_allowed_parallelism, std::size_t(count)) {}
+  tbb::global_control control;
+};
+
+ThreadLimit::ThreadLimit(int threads)
+    : m_count(threads > 0 ? threads : int(tbb::info::default_concurrency())),
+      m_control(std::make_unique<Control>(m_count)) {}
+
+ThreadLimit::~ThreadLimit() = default;
 
 std::string assetPath(const std::string& relative) {
   if (std::filesystem::exists(relative))

@@ -2,9 +2,18 @@
 /// Command line of the `fluidplaying` executable.
 
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
+
+namespace fp::sim {
+struct SceneDesc;
+struct SimParams;
+}  // namespace fp::sim
+namespace fp::render {
+struct RenderSettings;
+}
 
 namespace fp::engine {
 
@@ -24,7 +33,8 @@ struct CliOptions {
   std::optional<int> frames;      ///< --frames N
   std::optional<double> simTime;  ///< --sim-time S
   int threads = 0;                ///< --threads T (0: all cores)
-  std::optional<std::uint64_t> seed;  ///< --seed N
+  std::optional<std::uint64_t> seed;  ///< --seed N, in the table's range of `seed`
+  std::vector<std::string> sets;      ///< --set KEY=VALUE, in order: parameters over the scene's
   std::string statsPath;              ///< --stats FILE.json
   std::string exportDir;              ///< --export DIR
   bool quiet = false;                 ///< --quiet: no progress lines
@@ -58,11 +68,47 @@ long long parseInteger(const std::string& flag, const std::string& text, long lo
 /// A finite number > 0, the whole of `text`; throws std::invalid_argument naming `flag` otherwise.
 double parsePositive(const std::string& flag, const std::string& text);
 
-/// Parses argv; throws std::invalid_argument with a one-line message for bad input.
+/// Parses the arguments (without the program name) with the CLI11 declaration of `fluidplaying`; throws
+/// std::invalid_argument with a one-line message for bad input. --help sets `help`.
 CliOptions parseCommandLine(const std::vector<std::string>& args);
 
-/// The usage text.
+/// The --help text of `fluidplaying`.
 std::string usage();
+
+/// Applies one "KEY=VALUE" to `params`: "" or the table's one-line error (unknown key, type, range).
+/// Relations between parameters are checked by applySettings.
+std::string applySetting(sim::SimParams& params, const std::string& keyValue);
+/// Applies "KEY=VALUE" settings in order, then checks the relations between parameters; throws
+/// std::invalid_argument "--set ...: why" (a bad command line).
+void applySettings(sim::SimParams& params, const std::vector<std::string>& keyValues);
+
+/// What the command line changes in a scene: the resolution mode, the seed and --set settings.
+struct SceneOverrides {
+  std::string mode;                   ///< mode name (empty: the scene's)
+  std::optional<std::uint64_t> seed;  ///< seed (none: the scene's)
+  std::vector<std::string> sets;      ///< "KEY=VALUE" settings, in order
+};
+/// Applies the overrides to a loaded scene; throws std::invalid_argument for a bad mode or setting.
+void overrideScene(sim::SceneDesc& scene, const SceneOverrides& overrides);
+
+/// Sets what the options ask of the renderer (view, colour field, split highlight, spray) in `settings`.
+void applyRenderOptions(const CliOptions& options, render::RenderSettings& settings);
+
+/// The thread limit of a run: `threads` workers (0: all cores) for as long as it lives.
+class ThreadLimit {
+ public:
+  explicit ThreadLimit(int threads);
+  ~ThreadLimit();
+  ThreadLimit(const ThreadLimit&) = delete;
+  ThreadLimit& operator=(const ThreadLimit&) = delete;
+  /// the number of workers allowed
+  int count() const { return m_count; }
+
+ private:
+  int m_count;
+  struct Control;
+  std::unique_ptr<Control> m_control;
+};
 
 /// The default scene of the headless mode: assets/scenes/dam_break.json in the working directory, else in the
 /// source tree.

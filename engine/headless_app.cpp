@@ -1,7 +1,6 @@
 #include "engine/headless_app.h"
 
 #include <tbb/global_control.h>
-#include <tbb/info.h>
 
 #include <chrono>
 #include <cmath>
@@ -36,6 +35,7 @@ SessionConfig sessionConfigOf(const CliOptions& options) {
   c.scenePath = options.scenePath;
   c.mode = options.mode;
   c.seed = options.seed;
+  c.sets = options.sets;
   c.handScript = options.handScript;
   c.fixedStep = options.fixedStep;
   c.timeScale = options.timeScale;
@@ -44,8 +44,7 @@ SessionConfig sessionConfigOf(const CliOptions& options) {
 }
 
 RunSummary runHeadlessApp(const CliOptions& options, std::ostream& out) {
-  const int threads = options.threads > 0 ? options.threads : int(tbb::info::default_concurrency());
-  tbb::global_control control(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
+  const int threads = int(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
   SessionConfig config = sessionConfigOf(options);
   config.fixedStep = true;  // no wall clock without a window: every frame is 1 / frame_rate
   HeadlessPlatform platform(options);

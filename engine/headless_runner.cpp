@@ -1,7 +1,6 @@
 #include "engine/headless_runner.h"
 
 #include <tbb/global_control.h>
-#include <tbb/info.h>
 
 #include <chrono>
 #include <cmath>
@@ -55,16 +54,8 @@ void fillRunFigures(const sim::Simulation& simulation, RunSummary& s) {
 RunSummary runHeadless(const CliOptions& options, std::ostream& out, std::ostream& progress,
                        const FrameCallback& onFrame) {
   sim::SceneDesc scene = loadScene(options.scenePath);
-  if (options.seed)
-    scene.params.seed = *options.seed;
-  if (!options.mode.empty()) {
-    const auto mode = sim::parseMode(options.mode);
-    if (!mode)
-      throw sim::InputError("unknown mode '" + options.mode + "' (expected " + sim::modeNames() + ")");
-    scene.mode = *mode;
-  }
-  const int threads = options.threads > 0 ? options.threads : int(tbb::info::default_concurrency());
-  tbb::global_control control(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
+  overrideScene(scene, {options.mode, options.seed, options.sets});
+  const int threads = int(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
 
   double simTime = scene.simTime;
   if (options.simTime)

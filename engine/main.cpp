@@ -3,15 +3,13 @@
 /// steps when a recorded hand is replayed (--hand-script). Without a display the window mode says so in one
 /// line and runs headless instead.
 
-#include <tbb/global_control.h>
-#include <tbb/info.h>
-
 #include <iostream>
 #include <memory>
 #include <stdexcept>
 
 #include "engine/app_loop.h"
 #include "engine/cli.h"
+#include "engine/cli_app.h"
 #include "engine/desktop_platform.h"
 #include "engine/headless_app.h"
 #include "engine/headless_render.h"
@@ -23,8 +21,6 @@ namespace {
 using namespace fp::engine;
 
 int runWindow(const CliOptions& options) {
-  const int threads = options.threads > 0 ? options.threads : int(tbb::info::default_concurrency());
-  tbb::global_control control(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
   // the window and its shaders first: a missing shader stops the run before the scene is built
   DesktopPlatform platform(options, options.frames);
   AppSession session(sessionConfigOf(options));
@@ -92,13 +88,14 @@ int main(int argc, char** argv) {
   try {
     options = parseCommandLine(std::vector<std::string>(argv + 1, argv + argc));
   } catch (const std::invalid_argument& e) {
-    std::cerr << "fluidplaying: " << e.what() << "\n" << usage();
+    std::cerr << usageErrorLine("fluidplaying", e.what()) << "\n";
     return kExitUsage;
   }
   if (options.help) {
     std::cout << usage();
     return kExitOk;
   }
+  const ThreadLimit threads(options.threads);  // one limit for the window and the headless modes
   try {
     if (!options.headless) {
       try {
@@ -111,6 +108,10 @@ int main(int argc, char** argv) {
       }
     }
     return runHeadlessMode(options);
+  } catch (const std::invalid_argument& e) {
+    // a --set that breaks a relation with the scene's own parameters (dt_min above its dt_max)
+    std::cerr << usageErrorLine("fluidplaying", e.what()) << "\n";
+    return kExitUsage;
   } catch (const fp::sim::InputError& e) {
     std::cerr << "fluidplaying: " << e.what() << "\n";
     return kExitInput;

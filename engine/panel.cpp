@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <utility>
 
 #include "engine/presets.h"
 
@@ -16,6 +17,80 @@ namespace {
 
 // The table's groups in panel order; a group the table gains later still shows, after these.
 const char* const kGroupOrder[] = {"adaptivity", "splash", "solver", "time", "fluid", "robustness"};
+
+/// One widget for any table's entry: the value's type picks the widget, the table's setter checks the range.
+template <class S>
+bool entryWidget(S& values, const sim::ParamEntry<S>& info, std::string& message) {
+  using Table = sim::ParamTableOf<S>;
+  const std::string label = info.key + (info.live ? "" : " *");
+  std::string error;
+  bool edited = false;
+  // Widgets edit a copy; the table's setter stores it (or says why not).
+  sim::visit(info, std::as_const(values),
+             sim::Overloaded{
+                 [&](double v) {
+                   const double range = info.max - info.min;
+                   const float speed = float(std::max(std::abs(v) * 0.005, std::min(range, 10.0) * 1e-3));
+                   if (ImGui::DragScalar(label.c_str(), ImGuiDataType_Double, &v, speed, &info.min, &info.max,
+                                         "%.4g", ImGuiSliderFlags_AlwaysClamp)) {
+                     edited = true;
+                     error = Table::setScalar(values, info, v);
+                   }
+                 },
+                 [&](float v) {
+                   const float range = float(info.max - info.min);
+                   const float speed = std::max(std::abs(v) * 0.005f, std::min(range, 10.0f) * 1e-3f);
+                   if (ImGui::DragFloat(label.c_str(), &v, speed, float(info.min), float(info.max), "%.4g",
+                                        ImGuiSliderFlags_AlwaysClamp)) {
+                     edited = true;
+                     error = Table::setScalar(values, info, double(v));
+                   }
+                 },
+                 [&](int v) {
+                   if (ImGui::DragInt(label.c_str(), &v, 0.2f, int(info.min), int(info.max), "%d",
+                                      ImGuiSliderFlags_AlwaysClamp)) {
+                     edited = true;
+                     error = Table::setScalar(values, info, double(v));
+                   }
+                 },
+                 [&](bool v) {
+                   if (ImGui::Checkbox(label.c_str(), &v)) {
+                     edited = true;
+                     error = Table::setScalar(values, info, v ? 1.0 : 0.0);
+                   }
+                 },
+                 [&](std::uint64_t v) {
+                   ImU64 u = ImU64(v);
+                   if (ImGui::InputScalar(label.c_str(), ImGuiDataType_U64, &u)) {
+                     edited = true;
+                     error = Table::setScalar(values, info, double(u));
+                   }
+                 },
+                 [&](std::array<double, 3> v) {
+                   if (ImGui::DragScalarN(label.c_str(), ImGuiDataType_Double, v.data(), 3, 0.05f, &info.min,
+                                          &info.max, "%.3g", ImGuiSliderFlags_AlwaysClamp)) {
+                     edited = true;
+                     error = Table::setVec3(values, info, v);
+                   }
+                 },
+                 [&](const sim::Choice& c) {
+                   int index = c.index;
+                   std::vector<const char*> names;
+                   for (const std::string& n : info.choices)
+                     names.push_back(n.c_str());
+                   if (ImGui::Combo(label.c_str(), &index, names.data(), int(names.size()))) {
+                     edited = true;
+                     error = Table::setScalar(values, info, double(index));
+                   }
+                 }});
+  if (ImGui::IsItemHovered()) {
+    ImGui::SetTooltip("%s [%s]\nrange [%g, %g]%s", info.description.c_str(), info.unit.c_str(), info.min,
+                      info.max, info.live ? "" : "\n* applies on Reset (R)");
+  }
+  if (!error.empty())
+    message = error;
+  return edited && error.empty();
+}
 
 void plot(const char* label, const Series& s, const char* format, float lo = 0.0f) {
   char overlay[64];
@@ -128,29 +203,18 @@ void handControls(AppSession& session, PanelState& state) {
   }
 }
 
-void renderControls(render::RenderSettings& s) {
-  int view = int(s.view);
-  ImGui::RadioButton("water", &view, int(render::RenderSettings::View::Fluid));
-  ImGui::SameLine();
-  ImGui::RadioButton("particles (V)", &view, int(render::RenderSettings::View::Particles));
-  s.view = render::RenderSettings::View(view);
-  if (s.view == render::RenderSettings::View::Particles) {
-    static const char* const fields[] = {"mass", "phi", "omega", "nu", "speed", "density-error"};
-    int field = 0;
-    for (int k = 0; k < 6; ++k) {
-      if (render::parseColorField(fields[k]) == s.colorField)
-        field = k;
+void renderControls(render::RenderSettings& s, std::string& message) {
+  std::string group;
+  for (const auto& info : render::RenderSettingsTable::get().entries()) {
+    // the colour field only matters to the particle view
+    if (info.key == "color_field" && s.view != render::RenderSettings::View::Particles)
+      continue;
+    if (info.group != group) {
+      group = info.group;
+      ImGui::TextDisabled("%s", group.c_str());
     }
-    if (ImGui::Combo("colour", &field, fields, 6))
-      s.colorField = *render::parseColorField(fields[field]);
+    entryWidget(s, info, message);
   }
-  ImGui::Checkbox("split highlight", &s.highlightSplits);
-  ImGui::SameLine();
-  ImGui::Checkbox("spray", &s.showSpray);
-  ImGui::SameLine();
-  ImGui::Checkbox("colliders", &s.showColliders);
-  ImGui::SliderInt("filter passes", &s.filterIterations, 0, 6);
-  ImGui::SliderFloat("highlight [s]", &s.highlightDuration, 0.05f, 3.0f, "%.2f");
 }
 
 void presetControls(AppSession& session, PanelState& state) {
@@ -205,63 +269,7 @@ void parameterGroup(AppSession& session, const std::string& group, std::string& 
 }  // namespace
 
 bool parameterWidget(sim::SimParams& params, const sim::ParamInfo& info, std::string& message) {
-  const std::string label = info.key + (info.live ? "" : " *");
-  bool changed = false;
-  std::string error;
-  switch (info.kind) {
-    case sim::ParamKind::Number: {
-      double v = sim::ParamTable::getScalar(params, info);
-      const double range = info.max - info.min;
-      const float speed = float(std::max(std::abs(v) * 0.005, std::min(range, 10.0) * 1e-3));
-      if (ImGui::DragScalar(label.c_str(), ImGuiDataType_Double, &v, speed, &info.min, &info.max, "%.4g",
-                            ImGuiSliderFlags_AlwaysClamp)) {
-        error = sim::ParamTable::setScalar(params, info, v);
-        changed = error.empty();
-      }
-      break;
-    }
-    case sim::ParamKind::Integer: {
-      int v = int(sim::ParamTable::getScalar(params, info));
-      if (ImGui::DragInt(label.c_str(), &v, 0.2f, int(info.min), int(info.max), "%d",
-                         ImGuiSliderFlags_AlwaysClamp)) {
-        error = sim::ParamTable::setScalar(params, info, double(v));
-        changed = error.empty();
-      }
-      break;
-    }
-    case sim::ParamKind::Boolean: {
-      bool v = sim::ParamTable::getScalar(params, info) != 0.0;
-      if (ImGui::Checkbox(label.c_str(), &v)) {
-        error = sim::ParamTable::setScalar(params, info, v ? 1.0 : 0.0);
-        changed = error.empty();
-      }
-      break;
-    }
-    case sim::ParamKind::Vector3: {
-      std::array<double, 3> v = sim::ParamTable::getVec3(params, info);
-      if (ImGui::DragScalarN(label.c_str(), ImGuiDataType_Double, v.data(), 3, 0.05f, &info.min, &info.max,
-                             "%.3g", ImGuiSliderFlags_AlwaysClamp)) {
-        error = sim::ParamTable::setVec3(params, info, v);
-        changed = error.empty();
-      }
-      break;
-    }
-    case sim::ParamKind::Seed: {
-      ImU64 v = ImU64(sim::ParamTable::getScalar(params, info));
-      if (ImGui::InputScalar(label.c_str(), ImGuiDataType_U64, &v)) {
-        error = sim::ParamTable::setScalar(params, info, double(v));
-        changed = error.empty();
-      }
-      break;
-    }
-  }
-  if (ImGui::IsItemHovered()) {
-    ImGui::SetTooltip("%s [%s]\nrange [%g, %g]%s", info.description.c_str(), info.unit.c_str(), info.min,
-                      info.max, info.live ? "" : "\n* applies on Reset (R)");
-  }
-  if (!error.empty())
-    message = error;
-  return changed;
+  return entryWidget(params, info, message);
 }
 
 void drawPanel(AppSession& session, PanelState& state, render::RenderSettings& settings) {
@@ -292,7 +300,7 @@ void drawPanel(AppSession& session, PanelState& state, render::RenderSettings& s
     ImGui::PopID();
   }
   if (ImGui::CollapsingHeader("rendering"))
-    renderControls(settings);
+    renderControls(settings, state.message);
   if (ImGui::CollapsingHeader("presets"))
     presetControls(session, state);
   if (!state.message.empty())

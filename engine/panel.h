@@ -1,7 +1,8 @@
 #pragma once
 /// The ImGui panel: scene and mode, run controls, live statistics with plots, the hand, every simulation
 /// parameter of the table grouped as the table groups them (built from sim::ParamTable, never listed by
-/// hand), rendering settings and presets; and the help overlay with the controls.
+/// hand), the render settings (built from render::RenderSettingsTable) and presets; and the help overlay with
+/// the controls.
 
 #include <string>
 #include <utility>

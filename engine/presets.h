@@ -1,6 +1,6 @@
 #pragma once
 /// Panel presets: the resolution mode and every parameter of the table, saved and loaded as JSON
-/// ({"mode": "fluidplaying", "parameters": {"<key>": value, ...}}), with the scene loader's checks.
+/// ({"mode": "fluidplaying", "parameters": {"<key>": value, ...}}), read by the scenes' strict JSON reader.
 
 #include <string>
 

@@ -12,6 +12,7 @@
 
 #include "render/camera.h"
 #include "render/particle_colors.h"
+#include "render/render_settings.h"
 #include "sim/boundary_set.h"
 #include "sim/particle_set.h"
 
@@ -42,27 +43,6 @@ struct FrameData {
 
 /// The frame of a simulation: particles, colliders, time, domain and the scales of the colour fields.
 FrameData frameDataOf(const sim::Simulation& simulation, SpraySpan spray = {});
-
-/// What is drawn and how; every member may change between frames.
-struct RenderSettings {
-  enum class View { Fluid, Particles };
-  View view = View::Fluid;                 ///< screen-space water, or coloured spheres for inspection
-  ColorField colorField = ColorField::Nu;  ///< the quantity of the particle view
-  bool autoRange = true;                   ///< particle view: range from the parameters, else colorRange
-  ColorRange colorRange;                   ///< particle view range when autoRange is off
-  bool highlightSplits = true;             ///< tint split children red
-  float highlightDuration = 0.5f;          ///< how long after its split a child is tinted [s], > 0
-  bool showSpray = true;                   ///< draw splash particles
-  bool showColliders = true;               ///< draw floor, container and bodies
-  int filterIterations = 2;                ///< narrow-range filter passes (each horizontal + vertical), >= 0
-  float filterRadius = 3.0f;               ///< filter half-width in particle radii, > 0
-  float filterMaxPixels = 16.0f;           ///< cap on the filter half-width [px]
-  float filterRange = 3.0f;                ///< depth range kept by the filter, in particle radii
-  Eigen::Vector3f absorption{2.2f, 0.55f, 0.3f};  ///< Beer-Lambert coefficient per channel [1/m]
-  float refraction = 0.04f;        ///< screen-space refraction offset at full thickness [view units]
-  float highlightStrength = 1.0f;  ///< red density of a fresh child, per particle radius of thickness
-  bool profile = false;            ///< finish each pass and time it (slower; for the benchmark)
-};
 
 /// Where renderView draws: a framebuffer (0: the context's) and a viewport rectangle in it [px].
 struct RenderTarget {

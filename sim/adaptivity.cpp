@@ -5,9 +5,9 @@
 #include <algorithm>
 #include <cmath>
 
-#include "sim/boundary_sampling.h"
 #include "sim/kernels.h"
 #include "sim/levels.h"
+#include "sim/signed_distance.h"
 #include "sim/split_templates.h"
 
 namespace fp::sim {

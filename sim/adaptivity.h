@@ -1,5 +1,5 @@
 #pragma once
-/// Changing the resolution (METHOD.md section 5, after Winchenbach et al. 2017 "Infinite continuous
+/// Changing the resolution (docs/method.md, Adaptivity, after Winchenbach et al. 2017 "Infinite continuous
 /// adaptivity for incompressible SPH"): particles far heavier than their optimal mass split 1:n on a template
 /// turned to the orientation of least density error (Winchenbach & Kolb 2021), particles far lighter merge
 /// into neighbours, heavy ones share mass with light neighbours, and support radii follow the new masses over
@@ -59,7 +59,7 @@ class Adaptivity {
   /// `support_blend_steps` steps, so that densities do not jump after a split or a merge.
   static void blendSupports(ParticleSet& p, const SimParams& params, Real mFine);
 
-  /// Split error E (METHOD.md section 5) of placing the children of particle `o` at `children` (each of
+  /// Split error E (docs/method.md, Adaptivity) of placing the children of `o` at `children` (each of
   /// mass m_o / n), with the neighbourhood of the context [-]
   static double splitError(const AdaptContext& ctx, std::size_t o, const std::vector<Vec3>& children);
 

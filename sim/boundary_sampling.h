@@ -1,7 +1,6 @@
 #pragma once
 /// Surface sampling of collider shapes into boundary particles (Akinci et al. 2012 use one layer of particles
-/// on the surface), and signed distances to the shapes (inside < 0) so that fluid and split children are
-/// never placed in a wall.
+/// on the surface). The signed distances to the same shapes are in sim/signed_distance.h.
 
 #include <vector>
 
@@ -24,11 +23,5 @@ std::vector<Vec3d> sampleMeshSurface(const TriangleMesh& mesh, double spacing);
 
 /// Surface samples of a collider in its local frame (container boxes too: their walls are the box faces).
 std::vector<Vec3d> sampleColliderLocal(const ColliderDesc& collider, double spacing);
-
-/// Signed distance from a point in the collider's local frame to its surface: negative inside the solid. For
-/// a container box the solid is the outside, so points inside the box have positive distance.
-double signedDistanceLocal(const ColliderDesc& collider, const Vec3d& localPoint);
-/// Signed distance of a world point to a collider at its initial pose.
-double signedDistance(const ColliderDesc& collider, const Vec3d& worldPoint);
 
 }  // namespace fp::sim

@@ -1,5 +1,5 @@
 #pragma once
-/// The three levels of the FluidPlaying paper and the optimal mass (METHOD.md section 4): the distance to the
+/// The FluidPlaying paper's three levels and the optimal mass (docs/method.md, Levels): the distance to the
 /// free surface phi (cone surface detector of Winchenbach et al. 2017, then distance propagated through the
 /// neighbours), the vorticity magnitude omega and the velocity difference nu, each mapped through a user
 /// interval, combined into m_opt = m_fine + R_phi / (R_omega R_nu) (m_base - m_fine).

@@ -1,179 +1,122 @@
 #include "sim/params.h"
 
-#include <cmath>
-#include <sstream>
-
 namespace fp::sim {
 
-namespace {
-std::string formatRange(const ParamInfo& info) {
-  std::ostringstream s;
-  s << "[" << info.min << ", " << info.max << "]";
-  return s.str();
-}
-}  // namespace
-
-ParamTable::ParamTable() {
+// The one declaration of every simulation parameter: key, group, unit, range, whether it may change while the
+// simulation runs, description, member and default. Panel order.
+ParamTable::ParamTable() : ParamTableOf<SimParams>("parameter", &ParamTable::validate) {
   using P = SimParams;
-  auto add = [&](std::string key, std::string group, std::string unit, ParamKind kind, double min, double max,
-                 bool live, std::string description, auto member) {
-    m_entries.push_back(ParamInfo{std::move(key), std::move(group), std::move(unit), kind, min, max,
-                                  std::move(description), live, member});
-  };
-  const ParamKind R = ParamKind::Number;
-  const ParamKind I = ParamKind::Integer;
-  const ParamKind B = ParamKind::Boolean;
-  add("particle_radius", "fluid", "m", R, 1e-3, 0.5, false,
-      "radius of the finest particles (spacing 2r, support 4r)", &P::particleRadius);
-  add("rest_density", "fluid", "kg/m^3", R, 100.0, 20000.0, false, "rest density rho0", &P::restDensity);
-  add("gravity", "fluid", "m/s^2", ParamKind::Vector3, -100.0, 100.0, true, "gravitational acceleration",
-      &P::gravity);
-  add("viscosity", "fluid", "-", R, 0.0, 1.0, true, "XSPH viscosity: velocity smoothing per step",
-      &P::viscosity);
-  add("boundary_viscosity", "fluid", "-", R, 0.0, 1.0, true, "XSPH friction against boundaries",
-      &P::boundaryViscosity);
-  add("surface_tension", "fluid", "-", R, 0.0, 10.0, true, "Akinci 2013 surface tension coefficient, 0 = off",
-      &P::surfaceTension);
-  add("cfl_factor", "time", "-", R, 0.01, 1.0, true, "CFL number: dt = cfl * 2r / max speed", &P::cflFactor);
-  add("dt_max", "time", "s", R, 1e-5, 0.05, true, "largest time step", &P::dtMax);
-  add("dt_min", "time", "s", R, 1e-7, 0.01, true, "smallest time step", &P::dtMin);
-  add("initial_relaxation", "time", "steps", I, 0, 1000, false,
-      "damped steps settling the coarsened start of the modes with coarse particles", &P::initialRelaxation);
-  add("density_tolerance", "solver", "%", R, 1e-4, 10.0, true,
-      "allowed mean density error in percent of rho0", &P::densityTolerance);
-  add("divergence_tolerance", "solver", "%", R, 1e-4, 10.0, true,
-      "allowed mean divergence error in percent of rho0 per time step", &P::divergenceTolerance);
-  add("min_iterations", "solver", "-", I, 1, 100, true, "least pressure iterations per solve",
-      &P::minIterations);
-  add("max_iterations", "solver", "-", I, 1, 1000, true, "most pressure iterations per solve",
-      &P::maxIterations);
-  add("divergence_solve", "solver", "-", B, 0, 1, true, "run the divergence-free solve", &P::divergenceSolve);
-  add("warm_start", "solver", "-", B, 0, 1, true, "warm-start solves with the previous stiffness",
-      &P::warmStart);
-  add("mass_ratio", "adaptivity", "-", R, 1.0, 125.0, true,
-      "m_base / m_fine: mass of the coarsest particles over the finest", &P::massRatio);
-  add("surface_distance_lo", "adaptivity", "r", R, 0.0, 1000.0, true,
-      "distance to the surface below which particles are finest (in fine radii)", &P::surfaceDistanceLo);
-  add("surface_distance_hi", "adaptivity", "r", R, 0.0, 1000.0, true,
-      "distance to the surface above which particles are coarsest (in fine radii)", &P::surfaceDistanceHi);
-  add("vorticity_lo", "adaptivity", "1/s", R, 0.0, 1e4, true, "vorticity at which refinement starts",
-      &P::vorticityLo);
-  add("vorticity_hi", "adaptivity", "1/s", R, 0.0, 1e4, true, "vorticity of full refinement (Rmax)",
-      &P::vorticityHi);
-  add("vorticity_rmax", "adaptivity", "-", R, 1.0, 1000.0, true, "largest vorticity level Rmax_omega",
-      &P::vorticityRmax);
-  add("velocity_difference_lo", "adaptivity", "m/s", R, 0.0, 100.0, true,
-      "velocity difference at which refinement starts", &P::velocityDifferenceLo);
-  add("velocity_difference_hi", "adaptivity", "m/s", R, 0.0, 100.0, true,
-      "velocity difference of full refinement (Rmax)", &P::velocityDifferenceHi);
-  add("velocity_difference_rmax", "adaptivity", "-", R, 1.0, 1000.0, true,
-      "largest velocity-difference level Rmax_nu", &P::velocityDifferenceRmax);
-  add("mass_smoothing", "adaptivity", "-", R, 0.01, 1.0, true,
-      "share of the new optimal mass taken per adaptation step (1: none)", &P::massSmoothing);
-  add("adaptation_period", "adaptivity", "steps", I, 1, 100, true, "solver steps between adaptation steps",
-      &P::adaptationPeriod);
-  add("split_delay", "adaptivity", "steps", I, 0, 100, true,
-      "adaptation steps a particle stays too heavy before it splits", &P::splitDelay);
-  add("split_max_children", "adaptivity", "-", I, 8, 27, true, "n_max: most children of one split",
-      &P::splitMaxChildren);
-  add("orientation_candidates", "adaptivity", "-", I, 1, 64, true,
-      "K: template rotations tried per split (the unrotated one included)", &P::orientationCandidates);
-  add("merge_below", "adaptivity", "-", R, 0.0, 1.0, true, "m/m_opt below which a particle is merged",
-      &P::mergeBelow);
-  add("light_below", "adaptivity", "-", R, 0.0, 1.0, true, "m/m_opt below which a particle receives mass",
-      &P::lightBelow);
-  add("share_above", "adaptivity", "-", R, 1.0, 10.0, true, "m/m_opt above which a particle shares mass",
-      &P::shareAbove);
-  add("split_above", "adaptivity", "-", R, 1.0, 10.0, true, "m/m_opt at or above which a particle splits",
-      &P::splitAbove);
-  add("transfer_rate", "adaptivity", "-", R, 0.01, 1.0, true,
-      "most mass a merge or share receiver gains per adaptation step (share of its own)", &P::transferRate);
-  add("support_blend_steps", "adaptivity", "steps", I, 0, 100, true,
-      "steps over which a changed support radius is blended in (0: at once)", &P::supportBlendSteps);
-  add("splash_enabled", "splash", "-", B, 0, 1, true, "generate splash particles (render only)",
-      &P::splashEnabled);
-  add("splash_neighbors", "splash", "-", I, 1, 200, true,
-      "N_splash: surface particles with fewer neighbours spawn splash", &P::splashNeighbors);
-  add("splash_count", "splash", "-", I, 0, 64, true, "n_splash: splash particles per spawning particle",
-      &P::splashCount);
-  add("splash_alpha_min", "splash", "r", R, 0.0, 20.0, true, "alpha_min: smallest offset (particle radii)",
-      &P::splashAlphaMin);
-  add("splash_alpha_max", "splash", "r", R, 0.0, 20.0, true, "alpha_max: largest offset (particle radii)",
-      &P::splashAlphaMax);
-  add("splash_noise", "splash", "-", R, 0.0, 10.0, true, "n_r_max: length of the random direction added",
-      &P::splashNoise);
-  add("max_speed", "robustness", "m/s", R, 0.1, 1000.0, true,
-      "speed above which the run is reported unstable", &P::maxSpeed);
-  add("seed", "robustness", "-", ParamKind::Seed, 0, 4294967295.0, false, "seed of every random choice",
-      &P::seed);
+  const bool live = true;
+  const bool onReset = false;
+  // fluid
+  add("particle_radius", "fluid", "m", 1e-3, 0.5, onReset,
+      "radius r of the finest particles (spacing 2r, support 4r)", &P::particleRadius, 0.025);
+  add("rest_density", "fluid", "kg/m^3", 100.0, 20000.0, onReset, "rest density rho0", &P::restDensity,
+      1000.0);
+  add("gravity", "fluid", "m/s^2", -100.0, 100.0, live, "gravitational acceleration", &P::gravity,
+      std::array<double, 3>{0.0, -9.81, 0.0});
+  add("viscosity", "fluid", "-", 0.0, 1.0, live,
+      "XSPH viscosity: share of the velocity difference smoothed per step", &P::viscosity, 0.01);
+  add("boundary_viscosity", "fluid", "-", 0.0, 1.0, live, "XSPH friction against boundaries",
+      &P::boundaryViscosity, 0.0);
+  add("surface_tension", "fluid", "-", 0.0, 10.0, live,
+      "Akinci 2013 cohesion + curvature coefficient, 0 = off", &P::surfaceTension, 0.0);
+  // time stepping
+  add("cfl_factor", "time", "-", 0.01, 1.0, live, "CFL number: dt = cfl * 2r / max speed", &P::cflFactor,
+      0.4);
+  add("dt_max", "time", "s", 1e-5, 0.05, live, "largest time step", &P::dtMax, 0.005);
+  add("dt_min", "time", "s", 1e-7, 0.01, live, "smallest time step", &P::dtMin, 1e-5);
+  add("initial_relaxation", "time", "steps", 0, 1000, onReset,
+      "damped steps settling the coarsened start of the modes with coarse particles", &P::initialRelaxation,
+      20);
+  // pressure solver (DFSPH)
+  add("density_tolerance", "solver", "%", 1e-4, 10.0, live, "allowed mean density error in percent of rho0",
+      &P::densityTolerance, 0.1);
+  add("divergence_tolerance", "solver", "%", 1e-4, 10.0, live,
+      "allowed mean divergence error in percent of rho0 per time step", &P::divergenceTolerance, 0.1);
+  add("min_iterations", "solver", "-", 1, 100, live, "least pressure iterations per solve", &P::minIterations,
+      2);
+  add("max_iterations", "solver", "-", 1, 1000, live, "most pressure iterations per solve", &P::maxIterations,
+      100);
+  add("divergence_solve", "solver", "-", 0, 1, live, "run the divergence-free solve", &P::divergenceSolve,
+      true);
+  add("warm_start", "solver", "-", 0, 1, live, "warm-start both solves with the previous step's stiffness",
+      &P::warmStart, true);
+  // adaptivity (docs/method.md, Levels and Adaptivity)
+  add("mass_ratio", "adaptivity", "-", 1.0, 125.0, live,
+      "m_base / m_fine: mass of the coarsest particles over the finest", &P::massRatio, 27.0);
+  add("surface_distance_lo", "adaptivity", "r", 0.0, 1000.0, live,
+      "distance to the surface below which particles are finest, R_phi = 0 (in fine radii)",
+      &P::surfaceDistanceLo, 2.0);
+  add("surface_distance_hi", "adaptivity", "r", 0.0, 1000.0, live,
+      "distance to the surface above which particles are coarsest, R_phi = 1 (in fine radii)",
+      &P::surfaceDistanceHi, 12.0);
+  add("vorticity_lo", "adaptivity", "1/s", 0.0, 1e4, live,
+      "vorticity at which refinement starts (R_omega = 1)", &P::vorticityLo, 6.0);
+  add("vorticity_hi", "adaptivity", "1/s", 0.0, 1e4, live, "vorticity of full refinement (R_omega = Rmax)",
+      &P::vorticityHi, 14.0);
+  add("vorticity_rmax", "adaptivity", "-", 1.0, 1000.0, live, "largest vorticity level Rmax_omega",
+      &P::vorticityRmax, 8.0);
+  add("velocity_difference_lo", "adaptivity", "m/s", 0.0, 100.0, live,
+      "velocity difference at which refinement starts (R_nu = 1)", &P::velocityDifferenceLo, 0.35);
+  add("velocity_difference_hi", "adaptivity", "m/s", 0.0, 100.0, live,
+      "velocity difference of full refinement (R_nu = Rmax)", &P::velocityDifferenceHi, 0.7);
+  add("velocity_difference_rmax", "adaptivity", "-", 1.0, 1000.0, live,
+      "largest velocity-difference level Rmax_nu", &P::velocityDifferenceRmax, 8.0);
+  add("mass_smoothing", "adaptivity", "-", 0.01, 1.0, live,
+      "share of the new optimal mass taken per adaptation step (1: no smoothing)", &P::massSmoothing, 0.25);
+  add("adaptation_period", "adaptivity", "steps", 1, 100, live, "solver steps between adaptation steps",
+      &P::adaptationPeriod, 1);
+  add("split_delay", "adaptivity", "steps", 0, 100, live,
+      "adaptation steps a particle must stay too heavy before it splits", &P::splitDelay, 13);
+  add("split_max_children", "adaptivity", "-", 8, 27, live, "n_max: most children of one split",
+      &P::splitMaxChildren, 27);
+  add("orientation_candidates", "adaptivity", "-", 1, 64, live,
+      "K: template rotations tried per split (the unrotated one included)", &P::orientationCandidates, 8);
+  add("merge_below", "adaptivity", "-", 0.0, 1.0, live, "m / m_opt below which a particle is merged",
+      &P::mergeBelow, 0.51);
+  add("light_below", "adaptivity", "-", 0.0, 1.0, live, "m / m_opt below which a particle may receive mass",
+      &P::lightBelow, 0.9);
+  add("share_above", "adaptivity", "-", 1.0, 10.0, live,
+      "m / m_opt above which a particle shares mass with light neighbours", &P::shareAbove, 1.1);
+  add("split_above", "adaptivity", "-", 1.0, 10.0, live, "m / m_opt at or above which a particle splits",
+      &P::splitAbove, 1.99);
+  add("transfer_rate", "adaptivity", "-", 0.01, 1.0, live,
+      "most mass a merge or share receiver gains per adaptation step (share of its own)", &P::transferRate,
+      0.05);
+  add("support_blend_steps", "adaptivity", "steps", 0, 100, live,
+      "steps over which a changed support radius is blended in (0: at once)", &P::supportBlendSteps, 10);
+  // splash enhancement (docs/method.md, Splash)
+  add("splash_enabled", "splash", "-", 0, 1, live, "generate splash particles (render only)",
+      &P::splashEnabled, true);
+  add("splash_neighbors", "splash", "-", 1, 200, live,
+      "N_splash: surface particles with fewer fluid neighbours spawn splash", &P::splashNeighbors, 12);
+  add("splash_count", "splash", "-", 0, 64, live, "n_splash: splash particles per spawning particle",
+      &P::splashCount, 4);
+  add("splash_alpha_min", "splash", "r", 0.0, 20.0, live, "alpha_min: smallest offset (particle radii)",
+      &P::splashAlphaMin, 0.5);
+  add("splash_alpha_max", "splash", "r", 0.0, 20.0, live, "alpha_max: largest offset (particle radii)",
+      &P::splashAlphaMax, 3.0);
+  add("splash_noise", "splash", "-", 0.0, 10.0, live,
+      "n_r_max: length of the random direction added to the outward one", &P::splashNoise, 0.5);
+  // robustness
+  add("max_speed", "robustness", "m/s", 0.1, 1000.0, live,
+      "speed above which a fluid particle is reported as an instability", &P::maxSpeed, 50.0);
+  add("seed", "robustness", "-", 0, 4294967295.0, onReset,
+      "seed of every random choice (sampling jitter, split orientations)", &P::seed, 1);
+}
+
+SimParams::SimParams() {
+  ParamTable::sim().applyDefaults(*this);
+}
+
+bool operator==(const SimParams& a, const SimParams& b) {
+  return ParamTable::sim().allEqual(a, b);
 }
 
 const ParamTable& ParamTable::sim() {
   static const ParamTable table;
   return table;
-}
-
-const ParamInfo* ParamTable::find(std::string_view key) const {
-  for (const ParamInfo& e : m_entries) {
-    if (e.key == key)
-      return &e;
-  }
-  return nullptr;
-}
-
-double ParamTable::getScalar(const SimParams& p, const ParamInfo& info) {
-  return std::visit(
-      [&](auto member) -> double {
-        using M = std::decay_t<decltype(p.*member)>;
-        if constexpr (std::is_same_v<M, std::array<double, 3>>) {
-          return 0.0;
-        } else {
-          return static_cast<double>(p.*member);
-        }
-      },
-      info.member);
-}
-
-std::array<double, 3> ParamTable::getVec3(const SimParams& p, const ParamInfo& info) {
-  if (auto m = std::get_if<std::array<double, 3> SimParams::*>(&info.member))
-    return p.**m;
-  return {0.0, 0.0, 0.0};
-}
-
-std::string ParamTable::setScalar(SimParams& p, const ParamInfo& info, double value) {
-  if (info.kind == ParamKind::Vector3)
-    return info.key + " is a 3-vector";
-  if (!std::isfinite(value))
-    return info.key + " must be a finite number";
-  if (value < info.min || value > info.max) {
-    std::ostringstream s;
-    s << info.key << " = " << value << " is out of range " << formatRange(info);
-    return s.str();
-  }
-  if ((info.kind == ParamKind::Integer || info.kind == ParamKind::Seed) && value != std::floor(value)) {
-    return info.key + " must be an integer";
-  }
-  std::visit(
-      [&](auto member) {
-        using M = std::decay_t<decltype(p.*member)>;
-        if constexpr (!std::is_same_v<M, std::array<double, 3>>)
-          p.*member = static_cast<M>(value);
-      },
-      info.member);
-  return {};
-}
-
-std::string ParamTable::setVec3(SimParams& p, const ParamInfo& info, const std::array<double, 3>& value) {
-  auto m = std::get_if<std::array<double, 3> SimParams::*>(&info.member);
-  if (!m)
-    return info.key + " is not a 3-vector";
-  for (double c : value) {
-    if (!std::isfinite(c) || c < info.min || c > info.max) {
-      return info.key + " has a component out of range " + formatRange(info);
-    }
-  }
-  p.** m = value;
-  return {};
 }
 
 std::string ParamTable::validate(const SimParams& p) {

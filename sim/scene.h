@@ -14,7 +14,7 @@
 
 namespace fp::sim {
 
-/// How the resolution is chosen (METHOD.md section 4). The first two are uniform references; `Surface` is
+/// How the resolution is chosen (docs/method.md, Levels). The first two are uniform references; `Surface` is
 /// the surface-only adaptivity of Winchenbach et al. 2017 (R_omega = R_nu = 1); `FluidPlaying` uses all three
 /// levels.
 enum class AdaptivityMode { UniformLow, UniformHigh, Surface, FluidPlaying };

@@ -8,8 +8,8 @@
 #include <limits>
 #include <sstream>
 
-#include "sim/boundary_sampling.h"
 #include "sim/kernels.h"
+#include "sim/signed_distance.h"
 
 namespace fp::sim {
 

@@ -1,5 +1,5 @@
 #pragma once
-/// Splash enhancement of the FluidPlaying paper (METHOD.md section 6): a render-only post-process in which
+/// Splash enhancement of the FluidPlaying paper (docs/method.md, Splash): a render-only post-process in which
 /// sparse surface particles spawn temporary spray particles on their outward side. Nothing here feeds back
 /// into the simulation: the generator reads a const view of the particles and keeps its own neighbour grid.
 

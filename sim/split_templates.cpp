@@ -29,7 +29,7 @@ constexpr double kRepulsion = 0.01;
 
 /// Density error of replacing one parent of a cubic lattice of equal particles (radius 1, spacing 2, support
 /// 4, normalised volumes so the lattice is at rest density 1) by n children at positions x, each of volume
-/// V/n and support 4 n^(-1/3), pairs using the mean support: the objective of METHOD.md section 5,
+/// V/n and support 4 n^(-1/3), pairs using the mean support: the objective in docs/method.md, Adaptivity,
 ///   E = sum_j tau_j^2 + sum_s tau_s^2, tau_j = sum_s V_s W_js - V_o W_jo, tau_s = rho_s - 1.
 struct Objective {
   std::vector<Vec3d> lattice;  // the parent's neighbours that can reach a child

@@ -8,11 +8,11 @@
 #include <random>
 
 #include "sim/adaptivity.h"
-#include "sim/boundary_sampling.h"
 #include "sim/dfsph_solver.h"
 #include "sim/kernels.h"
 #include "sim/levels.h"
 #include "sim/metrics.h"
+#include "sim/signed_distance.h"
 #include "sim/simulation.h"
 #include "sim/split_templates.h"
 

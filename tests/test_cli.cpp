@@ -7,10 +7,12 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <vector>
 
 #include "engine/cli.h"
 #include "engine/headless_runner.h"
 #include "render/camera.h"
+#include "sim/scene.h"
 
 using namespace fp::engine;
 
@@ -23,6 +25,39 @@ int runExe(const std::string& args) {
   const std::string cmd = std::string(FP_FLUIDPLAYING_EXE) + " " + args + " > /dev/null 2>&1";
   const int status = std::system(cmd.c_str());
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+struct ExeRun {
+  int code = -1;
+  std::string out;
+  std::vector<std::string> errLines;
+};
+
+// runs the executable with `args`, keeping stdout and the lines of stderr
+ExeRun runExeOutput(const std::string& args) {
+  // one file pair per test: ctest runs the tests of this suite in parallel processes
+  const std::string base =
+      ::testing::TempDir() + "/fp_cli_run_" + ::testing::UnitTest::GetInstance()->current_test_info()->name();
+  const std::string cmd =
+      std::string(FP_FLUIDPLAYING_EXE) + " " + args + " > " + base + ".out 2> " + base + ".err";
+  const int status = std::system(cmd.c_str());
+  ExeRun r;
+  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::ifstream out(base + ".out");
+  r.out.assign(std::istreambuf_iterator<char>(out), std::istreambuf_iterator<char>());
+  std::ifstream err(base + ".err");
+  for (std::string line; std::getline(err, line);)
+    r.errLines.push_back(line);
+  return r;
+}
+
+std::string messageOf(const std::vector<std::string>& args) {
+  try {
+    parseCommandLine(args);
+  } catch (const std::invalid_argument& e) {
+    return e.what();
+  }
+  return "";
 }
 }  // namespace
 
@@ -113,6 +148,76 @@ TEST(CliTest, ExitCodesOfTheExecutable) {
   const std::string bad = ::testing::TempDir() + "/fp_bad_scene.json";
   std::ofstream(bad) << "{\"domain\": 3}";
   EXPECT_EQ(runExe("--headless --quiet --scene " + bad), kExitInput);
+}
+
+TEST(CliTest, HelpListsEveryOptionAndExitsZero) {
+  const ExeRun r = runExeOutput("--help");
+  EXPECT_EQ(r.code, kExitOk);
+  EXPECT_TRUE(r.errLines.empty());
+  for (const char* option : {"--headless",   "--scene",          "--mode",          "--frames",
+                             "--sim-time",   "--threads",        "--seed",          "--set",
+                             "--quiet",      "--hand-script",    "--hand-size",     "--fixed-step",
+                             "--time-scale", "--screenshot",     "--record-frames", "--fullscreen",
+                             "--no-panel",   "--stats",          "--export",        "--render",
+                             "--out",        "--width",          "--height",        "--view",
+                             "--color",      "--highlight-time", "--no-spray",      "--shaders",
+                             "Exit codes"}) {
+    EXPECT_NE(r.out.find(option), std::string::npos) << option;
+  }
+  EXPECT_EQ(runExe("-h"), kExitOk);
+  EXPECT_TRUE(parseCommandLine({"--help"}).help);
+}
+
+TEST(CliTest, ABadCommandLineIsExitTwoAndOneLine) {
+  for (const char* args : {"--no-such-flag", "--frames ten", "--frames", "--set dt_max=9", "--set nope=1",
+                           "--set dt_max", "--seed -1", "--headless --render", "stray"}) {
+    const ExeRun r = runExeOutput(std::string("--headless --quiet ") + args);
+    EXPECT_EQ(r.code, kExitUsage) << args;
+    ASSERT_EQ(r.errLines.size(), 1u) << args;
+    EXPECT_EQ(r.errLines[0].rfind("fluidplaying: ", 0), 0u) << r.errLines[0];
+    EXPECT_NE(r.errLines[0].find("--help"), std::string::npos) << r.errLines[0];
+    EXPECT_TRUE(r.out.empty()) << args;
+  }
+}
+
+TEST(CliTest, SetIsCheckedByTheParameterTable) {
+  const CliOptions o =
+      parseCommandLine({"--set", "dt_max=0.002", "--set", "gravity=0,-5,0", "--set=warm_start=0"});
+  EXPECT_EQ(o.sets, (std::vector<std::string>{"dt_max=0.002", "gravity=0,-5,0", "warm_start=0"}));
+  // the table's own messages: unknown key, range, type, form
+  EXPECT_NE(messageOf({"--set", "dt_maxx=1"}).find("dt_maxx"), std::string::npos);
+  EXPECT_NE(messageOf({"--set", "dt_max=9"}).find("dt_max"), std::string::npos);
+  EXPECT_NE(messageOf({"--set", "dt_max=9"}).find("range"), std::string::npos)
+      << messageOf({"--set", "dt_max=9"});
+  EXPECT_NE(messageOf({"--set", "max_iterations=2.5"}).find("max_iterations"), std::string::npos);
+  EXPECT_NE(messageOf({"--set", "gravity=1,2"}).find("gravity"), std::string::npos);
+  EXPECT_NE(messageOf({"--set", "=3"}).find("KEY=VALUE"), std::string::npos);
+  // applied to a scene in order, then the relations are checked
+  fp::sim::SceneDesc desc;
+  overrideScene(desc, {"surface", 9, {"dt_max=0.002", "gravity=0,-5,0", "warm_start=false"}});
+  EXPECT_EQ(desc.mode, fp::sim::AdaptivityMode::Surface);
+  EXPECT_EQ(desc.params.seed, 9u);
+  EXPECT_DOUBLE_EQ(desc.params.dtMax, 0.002);
+  EXPECT_DOUBLE_EQ(desc.params.gravity[1], -5.0);
+  EXPECT_FALSE(desc.params.warmStart);
+  EXPECT_THROW(overrideScene(desc, {"", std::nullopt, {"dt_min=0.009"}}),
+               std::invalid_argument);  // > dt_max
+  // a relation broken with the scene's own values is a bad command line too
+  EXPECT_EQ(
+      runExe("--headless --quiet --frames 1 --scene " + scene("tiny_dam_break.json") + " --set dt_min=0.009"),
+      kExitUsage);
+}
+
+TEST(CliTest, SetAndSeedReachTheRun) {
+  CliOptions o = parseCommandLine({"--headless", "--quiet", "--frames", "2", "--scene",
+                                   scene("tiny_dam_break.json"), "--seed", "77", "--set", "max_speed=40"});
+  std::ostringstream out, progress;
+  const RunSummary s = runHeadless(o, out, progress);
+  EXPECT_EQ(s.seed, 77u);
+  EXPECT_EQ(s.status, "ok");
+  EXPECT_EQ(runExe("--headless --quiet --frames 1 --scene " + scene("tiny_dam_break.json") +
+                   " --set max_speed=40 --set seed=3"),
+            kExitOk);
 }
 
 TEST(CliTest, ParsesAppOptions) {

@@ -14,6 +14,7 @@
 
 #include "sim/boundary_sampling.h"
 #include "sim/mesh.h"
+#include "sim/signed_distance.h"
 
 namespace fp::sim {
 namespace {

@@ -5,8 +5,8 @@
 
 #include <cstring>
 
-#include "sim/boundary_sampling.h"
 #include "sim/ply_writer.h"
+#include "sim/signed_distance.h"
 #include "sim/simulation.h"
 #include "tests/scene_fixtures.h"
 

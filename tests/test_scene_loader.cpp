@@ -1,5 +1,5 @@
 // Scene loading: every shipped scene loads with the intended values, and every kind of bad input is rejected
-// with one line that names the file and the exact JSON path.
+// with one line that names the file and the exact JSON path. Presets go through the same strict reader.
 
 #include <gtest/gtest.h>
 
@@ -13,6 +13,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "engine/json_reader.h"
+#include "engine/presets.h"
 #include "engine/scene_loader.h"
 
 namespace fp::engine {
@@ -431,6 +433,97 @@ TEST(SceneLoaderTest, MissingSceneFile) {
     FAIL() << "no error";
   } catch (const sim::InputError& e) {
     EXPECT_EQ(std::string(e.what()), path + ": cannot open scene file");
+  }
+}
+
+// Presets are read by the scenes' strict reader: the same duplicate-key, suggestion and path messages.
+class PresetFileTest : public ::testing::Test {
+ protected:
+  std::string m_path = (fs::path(::testing::TempDir()) / "fp_strict_preset.json").string();
+  void TearDown() override { fs::remove(m_path); }
+  std::string errorOfPreset(const std::string& text) {
+    std::ofstream(m_path) << text;
+    try {
+      loadPreset(m_path, Preset{});
+    } catch (const sim::InputError& e) {
+      const std::string message = e.what();
+      EXPECT_EQ(message.find('\n'), std::string::npos) << "not one line: " << message;
+      EXPECT_EQ(message.rfind(m_path + ": ", 0), 0u) << message;
+      return message.substr(m_path.size() + 2);
+    }
+    ADD_FAILURE() << "no error for: " << text;
+    return {};
+  }
+};
+
+TEST_F(PresetFileTest, RoundTripsEveryParameter) {
+  Preset p;
+  p.mode = sim::AdaptivityMode::Surface;
+  p.params.gravity = {0.5, -3.0, 1.0 / 3.0};
+  p.params.dtMin = 1.0 / 7.0 * 1e-4;
+  p.params.seed = 4294967295u;
+  p.params.divergenceSolve = false;
+  savePreset(m_path, p);
+  const Preset q = loadPreset(m_path, Preset{});
+  EXPECT_EQ(q.mode, p.mode);
+  for (const sim::ParamInfo& info : sim::ParamTable::sim().entries())
+    EXPECT_TRUE(sim::ParamTable::equal(info, p.params, q.params)) << info.key;
+}
+
+TEST_F(PresetFileTest, KeysLeftOutKeepTheBase) {
+  Preset base;
+  base.params.viscosity = 0.5;
+  std::ofstream(m_path) << R"({"parameters": {"splash_count": 9}})";
+  const Preset q = loadPreset(m_path, base);
+  EXPECT_EQ(q.params.viscosity, 0.5);
+  EXPECT_EQ(q.params.splashCount, 9);
+}
+
+TEST_F(PresetFileTest, ErrorsNameThePath) {
+  EXPECT_EQ(errorOfPreset(R"({"parameters": {"viscosity": 0.1, "viscosity": 0.2}})"),
+            "$.parameters.viscosity: duplicate key");
+  const std::string misspelt = errorOfPreset(R"({"parameters": {"surface_distanse_lo": 3}})");
+  EXPECT_EQ(misspelt.rfind("$.parameters.surface_distanse_lo: unknown parameter (did you mean "
+                           "surface_distance_lo?) (known: particle_radius, ",
+                           0),
+            0u)
+      << misspelt;
+  EXPECT_EQ(errorOfPreset(R"({"mdoe": "surface"})").rfind("$.mdoe: unknown key (did you mean mode?)", 0), 0u);
+  EXPECT_EQ(errorOfPreset(R"({"parameters": {"split_max_children": 99}})"),
+            "$.parameters.split_max_children: split_max_children = 99 is out of range [8, 27]");
+  EXPECT_EQ(errorOfPreset(R"({"parameters": {"warm_start": 1}})"),
+            "$.parameters.warm_start: expected a boolean, got a number");
+  EXPECT_EQ(errorOfPreset(R"({"parameters": {"gravity": [0, "x", 0]}})"),
+            "$.parameters.gravity[1]: expected a number, got a string");
+  EXPECT_EQ(errorOfPreset(R"({"mode": "adaptive"})"),
+            "$.mode: expected one of " + std::string(sim::modeNames()) + ", got 'adaptive'");
+  EXPECT_EQ(errorOfPreset(R"({"parameters": {"dt_min": 0.01, "dt_max": 0.001}})"),
+            "$.parameters: dt_min must not exceed dt_max");
+  EXPECT_EQ(errorOfPreset("{\"mode\": }").rfind("line 1, column 10: invalid JSON: ", 0), 0u);
+}
+
+// The reader on its own: any table, paths of nested members, suggestions among the allowed keys.
+TEST(JsonReaderTest, ReadsATableAndNamesPaths) {
+  const JsonReader reader("f.json");
+  const nlohmann::json j = reader.parse(R"({"p": {"dt_max": 0.002, "gravity": [0, -1, 0], "seed": 7}})");
+  sim::SimParams params;
+  reader.readTable(j["p"], "$.p", sim::ParamTable::sim(), params);
+  EXPECT_EQ(params.dtMax, 0.002);
+  EXPECT_EQ(params.gravity, (std::array<double, 3>{0, -1, 0}));
+  EXPECT_EQ(params.seed, 7u);
+  EXPECT_EQ(memberPath("$.a", "b c"), "$.a[\"b c\"]");
+  EXPECT_EQ(indexPath("$.a", 2), "$.a[2]");
+  try {
+    reader.expectObject(j, "$", {"q", "r"});
+    ADD_FAILURE();
+  } catch (const sim::InputError& e) {
+    EXPECT_STREQ(e.what(), "f.json: $.p: unknown key (did you mean q?) (allowed: q or r)");
+  }
+  try {
+    reader.parse(R"({"a": [{"b": 1, "b": 2}]})");
+    ADD_FAILURE();
+  } catch (const sim::InputError& e) {
+    EXPECT_STREQ(e.what(), "f.json: $.a[0].b: duplicate key");
   }
 }
 

@@ -1,4 +1,4 @@
-// The splash post-process (METHOD.md section 6) on hand-built neighbourhoods: the formula, which particles
+// The splash post-process (docs/method.md, Splash) on hand-built neighbourhoods: the formula, which particles
 // spawn, counts, determinism across frames and threads, and a simulation that is bit-identical with splash on
 // and off. Tests named *Small* also run under the sanitizers in CI.
 #include <gtest/gtest.h>

@@ -1,0 +1,47 @@
+#include "render/render_settings.h"
+
+namespace fp::render {
+
+// The one declaration of every user-facing render setting. Panel order; every setting is live.
+RenderSettingsTable::RenderSettingsTable() : sim::ParamTableOf<RenderSettings>("render setting") {
+  using R = RenderSettings;
+  std::vector<std::string> fields;
+  for (ColorField f : {ColorField::MassLevel, ColorField::Phi, ColorField::Omega, ColorField::Nu,
+                       ColorField::Speed, ColorField::DensityError}) {
+    if (int(f) != int(fields.size()))
+      throw std::logic_error("ColorField values must be 0, 1, 2, ... in this order");
+    fields.push_back(colorFieldName(f));
+  }
+  addChoice<&R::view>("view", "view", "screen-space water, or coloured spheres for inspection", true,
+                      {"fluid", "particles"}, int(R::View::Fluid));
+  addChoice<&R::colorField>("color_field", "view", "the quantity the particle view colours by", true,
+                            std::move(fields), int(ColorField::Nu));
+  add("highlight_splits", "view", "-", 0, 1, true, "tint split children red", &R::highlightSplits, true);
+  add("highlight_duration", "view", "s", 0.01, 10.0, true, "how long after its split a child is tinted",
+      &R::highlightDuration, 0.5f);
+  add("highlight_strength", "view", "-", 0.0, 10.0, true,
+      "red density of a fresh child, per particle radius of thickness", &R::highlightStrength, 1.0f);
+  add("show_spray", "view", "-", 0, 1, true, "draw splash particles", &R::showSpray, true);
+  add("show_colliders", "view", "-", 0, 1, true, "draw floor, container and bodies", &R::showColliders, true);
+  add("filter_iterations", "water", "-", 0, 10, true,
+      "narrow-range filter passes (each horizontal + vertical)", &R::filterIterations, 2);
+  add("filter_radius", "water", "r", 0.1, 20.0, true, "filter half-width in fine particle radii",
+      &R::filterRadius, 3.0f);
+  add("filter_max_pixels", "water", "px", 1.0, 256.0, true, "cap on the filter half-width",
+      &R::filterMaxPixels, 16.0f);
+  add("filter_range", "water", "r", 0.1, 20.0, true, "depth range kept by the filter in fine particle radii",
+      &R::filterRange, 3.0f);
+  add("refraction", "water", "-", 0.0, 1.0, true,
+      "screen-space refraction offset at full thickness (view units)", &R::refraction, 0.04f);
+}
+
+const RenderSettingsTable& RenderSettingsTable::get() {
+  static const RenderSettingsTable table;
+  return table;
+}
+
+RenderSettings::RenderSettings() {
+  RenderSettingsTable::get().applyDefaults(*this);
+}
+
+}  // namespace fp::render
