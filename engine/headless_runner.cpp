@@ -13,6 +13,7 @@
 #include "sim/metrics.h"
 #include "sim/ply_writer.h"
 #include "sim/splash.h"
+#include "sim/state_io.h"
 
 namespace fp::engine {
 
@@ -70,6 +71,8 @@ RunSummary runHeadless(const CliOptions& options, std::ostream& out, std::ostrea
   }
 
   sim::Simulation simulation(scene);
+  if (!options.loadState.empty())
+    sim::loadState(options.loadState, simulation);
   RunSummary s;
   s.scene = options.scenePath;
   s.mode = sim::modeName(scene.mode);
@@ -82,17 +85,19 @@ RunSummary runHeadless(const CliOptions& options, std::ostream& out, std::ostrea
       << " threads, " << simTime << " s to simulate\n";
 
   const double frameDt = 1.0 / scene.frameRate;
-  int frame = 0;
+  // a loaded state resumes at its frame (states are saved at frame ends)
+  int frame = int(std::lround(simulation.time() / frameDt));
   // Splash and the height the water reaches are measured every frame (the paper's splash height: the height
   // below which 99.9 % of the mass lies, above its value at rest, i.e. at frame 0).
   sim::SplashGenerator splash;
   double restHeight = 0.0;
+  const int firstFrame = frame;
   auto measure = [&]() {
     const sim::SplashParticles& sp = splash.generate(simulation, std::uint64_t(frame));
     const double h = sim::heightPercentile(simulation.particles(), kSplashHeightFraction);
     const double hs = sim::heightPercentile(simulation.particles(), kSplashHeightFraction, &sp,
                                             simulation.params().splashCount);
-    if (frame == 0)
+    if (frame == firstFrame)
       restHeight = h;
     s.splashParticles += double(sp.size());
     s.splashHeight += h - restHeight;
@@ -117,6 +122,8 @@ RunSummary runHeadless(const CliOptions& options, std::ostream& out, std::ostrea
         measure();
         if (onFrame)
           onFrame(frame, simulation);
+        if (options.saveEvery > 0 && frame % options.saveEvery == 0)
+          sim::saveState(options.saveState, simulation);
       }
       const auto now = Clock::now();
       if (!options.quiet && std::chrono::duration<double>(now - lastReport).count() > 2.0) {
@@ -133,10 +140,12 @@ RunSummary runHeadless(const CliOptions& options, std::ostream& out, std::ostrea
     s.status = "unstable";
     s.message = e.what();
   }
+  if (!options.saveState.empty() && s.status == "ok")
+    sim::saveState(options.saveState, simulation);
   s.wallSeconds = std::chrono::duration<double>(Clock::now() - start).count();
-  s.splashParticles /= double(frame + 1);
-  s.splashHeight /= double(frame + 1);
-  s.splashHeightWithSplash /= double(frame + 1);
+  s.splashParticles /= double(frame - firstFrame + 1);
+  s.splashHeight /= double(frame - firstFrame + 1);
+  s.splashHeightWithSplash /= double(frame - firstFrame + 1);
   s.frames = frame;
   fillRunFigures(simulation, s);
   return s;

@@ -198,6 +198,36 @@ TEST(RobustnessTest, FullDiskForFramesStatsAndStates) {
   expectOneLineError([&] { sim::saveState("/dev/full", simulation); }, "/dev/full");
 }
 
+TEST(RobustnessTest, SavedStateResumesBitIdenticallyAndBadOnesExitWithOneLine) {
+  const fs::path dir = scratch("state");
+  const std::string run = "--headless --quiet --threads 1 --mode fluidplaying --scene " +
+                          engine::assetPath("assets/scenes/tiny_dam_break.json");
+  const std::string whole = (dir / "whole.bin").string(), half = (dir / "half.bin").string(),
+                    resumed = (dir / "resumed.bin").string();
+  std::string err;
+  ASSERT_EQ(runExe(run + " --frames 16 --save-state " + whole, err), engine::kExitOk) << err;
+  ASSERT_EQ(runExe(run + " --frames 8 --save-state " + half, err), engine::kExitOk) << err;
+  ASSERT_EQ(runExe(run + " --frames 16 --load-state " + half + " --save-state " + resumed, err),
+            engine::kExitOk)
+      << err;
+  auto bytes = [](const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  };
+  EXPECT_GT(bytes(whole).size(), 1000u);
+  EXPECT_TRUE(bytes(whole) == bytes(resumed)) << "the resumed run's final state differs";
+  // another seed, a truncated file, a folder: exit 3 with one line
+  for (const std::string& bad : {run + " --frames 16 --seed 9 --load-state " + half,
+                                 run + " --frames 16 --load-state " + dir.string()}) {
+    EXPECT_EQ(runExe(bad, err), engine::kExitInput) << bad;
+    EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+  }
+  writeFile(half, bytes(whole).substr(0, 100));
+  EXPECT_EQ(runExe(run + " --frames 16 --load-state " + half, err), engine::kExitInput);
+  EXPECT_NE(err.find("truncated"), std::string::npos) << err;
+  EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+}
+
 TEST(RobustnessTest, NoGl33FallsBackToHeadlessInOneLine) {
   if (!std::getenv("DISPLAY"))
     GTEST_SKIP() << "needs a display (CI runs it under Xvfb)";

@@ -22,7 +22,7 @@
 #include "engine/app_session.h"
 #include "engine/cli.h"
 #include "input/hand_model.h"
-#include "sim/boundary_sampling.h"
+#include "sim/signed_distance.h"
 
 namespace {
 
