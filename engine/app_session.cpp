@@ -6,6 +6,7 @@
 
 #include "engine/cli.h"
 #include "engine/scene_loader.h"
+#include "sim/state_io.h"
 
 namespace fp::engine {
 
@@ -82,13 +83,34 @@ void AppSession::build() {
   const input::HandDriver hand = input::HandDriver::attach(scene, model, rest);
   // built aside first: a scene that fails to build leaves the running simulation as it was
   auto simulation = std::make_unique<sim::Simulation>(scene);
+  std::optional<input::HandPose> savedPose;
+  std::string stateNote;
+  if (!m_config.statePath.empty()) {
+    try {
+      const std::vector<double> hand = sim::loadState(m_config.statePath, *simulation);
+      if (hand.size() == 9) {
+        input::HandPose pose;
+        pose.position = sim::Vec3d(hand[0], hand[1], hand[2]);
+        pose.orientation = sim::Quatd(hand[3], hand[4], hand[5], hand[6]).normalized();
+        pose.grip = std::clamp(hand[7], 0.0, 1.0);
+        pose.point = std::clamp(hand[8], 0.0, 1.0);
+        if (pose.position.allFinite() && pose.orientation.coeffs().allFinite())
+          savedPose = pose;
+      }
+    } catch (const sim::StateError& e) {
+      if (!m_sim)
+        throw;  // the state asked for at the start must fit
+      // a rebuild in another mode or with other parameters starts from the scene instead
+      stateNote = std::string("the saved state does not fit this scene and these settings: ") + e.what();
+    }
+  }
   m_restPose = rest;
   m_hand = hand;
   m_sim = std::move(simulation);
-  m_handPose = m_restPose;
-  m_handTarget = m_restPose;
+  m_handPose = savedPose ? *savedPose : m_restPose;
+  m_handTarget = m_handPose;
   m_segment = input::PoseTrack();
-  m_mouseHand.place(m_restPose);
+  m_mouseHand.place(m_handPose);
   // the palm stays where the fingers remain inside the domain
   const sim::Vec3d margin(0.05, 0.3 * model.reachBelowPalm(), 0.05);
   m_mouseHand.lo = scene.domain.min() + margin;
@@ -96,7 +118,7 @@ void AppSession::build() {
   if (m_replay)
     m_replayStart = 0.0;
   m_stats.uniformHighCount = double(m_sim->totalMass() / m_sim->latticeMass());
-  m_targetTime = 0.0;
+  m_targetTime = m_sim->time();
   m_stepsBefore = 0;
   m_splitsBefore = 0;
   m_mergesBefore = 0;
@@ -104,7 +126,7 @@ void AppSession::build() {
   m_simTotal = 0.0;
   m_restartPending = false;
   m_handScalePending = false;
-  m_error.clear();
+  m_error = stateNote;
   m_lastFinish = Clock::now();
 }
 
@@ -136,6 +158,13 @@ input::PoseTrack AppSession::stopRecording() {
   input::PoseTrack out = m_recording ? std::move(*m_recording) : input::PoseTrack();
   m_recording.reset();
   return out;
+}
+
+void AppSession::saveState(const std::string& path) const {
+  const input::HandPose& h = m_handPose;
+  sim::saveState(path, *m_sim,
+                 {h.position.x(), h.position.y(), h.position.z(), h.orientation.w(), h.orientation.x(),
+                  h.orientation.y(), h.orientation.z(), h.grip, h.point});
 }
 
 double AppSession::meanRealTimeFactor() const {

@@ -35,6 +35,7 @@ struct SessionConfig {
   bool fixedStep = false;             ///< every frame advances exactly 1 / frame_rate of simulated time
   double timeScale = 1.0;             ///< simulated seconds per wall second wanted, in (0, 4]
   double handScale = 1.0;             ///< hand size factor (1: adult)
+  std::string statePath;  ///< saved state (sim/state_io.h) the session starts from and Reset returns to
 };
 
 /// A time series for the panel's plots: the last `capacity` values.
@@ -149,6 +150,9 @@ class AppSession {
   /// the frames' simulated-time targets keep the hand: the pose the mouse hand has now is where the hand is
   /// at the end of the coming frame's steps
   void setHandTarget(const input::HandPose& pose) { m_handTarget = pose; }
+
+  /// writes the simulation's state and the hand's pose (sim/state_io.h); throws sim::InputError
+  void saveState(const std::string& path) const;
 
   /// the mean real-time factor since construction or the last reset (simulated / wall time)
   double meanRealTimeFactor() const;

@@ -136,19 +136,20 @@ struct Declaration {
     CLI::Option* saveState =
         app.add_option(
                "--save-state", o.saveState,
-               "write the simulation state (sim/state_io.h) at the end of the run; a run resumed from "
-               "it with --load-state is bit-identical on one thread")
+               "write the simulation state (sim/state_io.h) and the hand's pose at the end of the run "
+               "(window too); resumed with --load-state, a headless run is bit-identical on one thread")
             ->type_name("FILE")
-            ->group(headless);
+            ->group(run);
     line.addInteger(
             "--save-every", [&o](long long n) { o.saveEvery = int(n); }, 1, 100000000,
             "with --save-state: write it every N frames too")
         ->group(headless)
         ->needs(saveState);
     app.add_option("--load-state", o.loadState,
-                   "start from a state written by --save-state (same scene, --mode, --seed and --set)")
+                   "start from a state written by --save-state (same scene, --mode, --seed, --set and "
+                   "--hand-size); the window's Reset returns to it")
         ->type_name("FILE")
-        ->group(headless);
+        ->group(run);
     app.add_option("--export", o.exportDir, "write the particles of every frame as binary PLY into DIR")
         ->type_name("DIR")
         ->group(headless);
@@ -231,12 +232,8 @@ CliOptions parseCommandLine(const std::vector<std::string>& args) {
     throw std::invalid_argument(v->get_name() + " needs --render (or the window, without --headless)");
   if (const CLI::Option* w = firstGiven(d.windowOnly); w && o.headless)
     throw std::invalid_argument(w->get_name() + " applies to the window, not --headless");
-  if (!o.headless && (!o.saveState.empty() || !o.loadState.empty()))
-    throw std::invalid_argument(
-        "--save-state and --load-state need --headless (the window cannot load one yet)");
-  if (!o.handScript.empty() && (!o.saveState.empty() || !o.loadState.empty()))
-    throw std::invalid_argument(
-        "--save-state and --load-state do not apply to the hand replay (--hand-script) yet");
+  if (o.saveEvery > 0 && (!o.headless || !o.handScript.empty()))
+    throw std::invalid_argument("--save-every applies to the headless runner (without --hand-script)");
   if (!o.headless && o.simTime)
     throw std::invalid_argument("--sim-time needs --headless (the window runs until closed or --frames)");
   if (o.render && o.outDir.empty())

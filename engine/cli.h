@@ -38,9 +38,9 @@ struct CliOptions {
   std::string statsPath;              ///< --stats FILE.json
   std::string exportDir;              ///< --export DIR
   bool quiet = false;                 ///< --quiet: no progress lines
-  std::string saveState;              ///< --save-state FILE: the state at the end (headless, sim/state_io.h)
-  int saveEvery = 0;                  ///< --save-every N: --save-state also every N frames (0: at the end)
-  std::string loadState;              ///< --load-state FILE: start from a saved state (headless)
+  std::string saveState;              ///< --save-state FILE: the state at the end (sim/state_io.h)
+  int saveEvery = 0;                  ///< --save-every N: --save-state also every N frames (headless runner)
+  std::string loadState;              ///< --load-state FILE: start from a saved state; Reset returns to it
   std::string mode;                   ///< --mode NAME (empty: the scene's mode)
   // rendering (headless, through OSMesa)
   bool render = false;                  ///< --render: write a PNG of every frame (implies --headless)

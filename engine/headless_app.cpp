@@ -40,6 +40,7 @@ SessionConfig sessionConfigOf(const CliOptions& options) {
   c.fixedStep = options.fixedStep;
   c.timeScale = options.timeScale;
   c.handScale = options.handScale;
+  c.statePath = options.loadState;
   return c;
 }
 
@@ -53,8 +54,10 @@ RunSummary runHeadlessApp(const CliOptions& options, std::ostream& out) {
   double simTime = session.scene().simTime;
   if (options.simTime)
     simTime = *options.simTime;
+  // a loaded state resumes at its frame: the run ends where the uninterrupted one would
   const int frames =
-      options.frames ? *options.frames : int(std::ceil(simTime * session.scene().frameRate - 1e-9));
+      (options.frames ? *options.frames : int(std::ceil(simTime * session.scene().frameRate - 1e-9))) -
+      int(std::lround(simulation.time() * session.scene().frameRate));
   RunSummary s;
   s.scene = options.scenePath;
   s.mode = sim::modeName(simulation.mode());
@@ -69,12 +72,14 @@ RunSummary runHeadlessApp(const CliOptions& options, std::ostream& out) {
         << " frames\n";
   }
   const auto start = std::chrono::steady_clock::now();
-  s.frames = runAppLoop(session, platform, frames);
+  s.frames = frames > 0 ? runAppLoop(session, platform, frames) : 0;
   s.wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const sim::Simulation& sim = session.simulation();
   if (!session.error().empty()) {
     s.status = "unstable";
     s.message = session.error();
+  } else if (!options.saveState.empty()) {
+    session.saveState(options.saveState);
   }
   fillRunFigures(sim, s);
   return s;

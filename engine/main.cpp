@@ -31,6 +31,8 @@ int runWindow(const CliOptions& options) {
   }
   const int frames = runAppLoop(session, platform, options.frames);
   platform.finish();
+  if (!options.saveState.empty())
+    session.saveState(options.saveState);
   if (!options.quiet) {
     std::cout << "frames " << frames << ", simulated " << session.simulation().time()
               << " s, real-time factor " << session.meanRealTimeFactor() << "\n";

@@ -13,6 +13,7 @@
 #include <sstream>
 #include <string>
 
+#include "engine/app_session.h"
 #include "engine/cli.h"
 #include "engine/presets.h"
 #include "engine/scene_loader.h"
@@ -226,6 +227,45 @@ TEST(RobustnessTest, SavedStateResumesBitIdenticallyAndBadOnesExitWithOneLine) {
   EXPECT_EQ(runExe(run + " --frames 16 --load-state " + half, err), engine::kExitInput);
   EXPECT_NE(err.find("truncated"), std::string::npos) << err;
   EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+}
+
+TEST(RobustnessTest, SessionStartsFromASavedStateAndResetReturnsToIt) {
+  const fs::path dir = scratch("session_state");
+  const std::string path = (dir / "session.bin").string();
+  engine::SessionConfig config;
+  config.scenePath = engine::assetPath("assets/scenes/tiny_dam_break.json");
+  config.fixedStep = true;
+  config.handScript = engine::assetPath("assets/hands/push.csv");
+  auto frames = [](engine::AppSession& session, int n) {
+    for (int k = 0; k < n; ++k) {
+      session.finishSteps();
+      session.setHandTarget(session.handPose());
+      session.applyRequests();
+      session.startSteps(1.0 / 60.0, 1.0);
+    }
+    session.finishSteps();
+  };
+  engine::AppSession first(config);
+  frames(first, 6);
+  first.saveState(path);
+  const double savedTime = first.simulation().time();
+  const std::size_t savedCount = first.simulation().particles().size();
+
+  config.statePath = path;
+  engine::AppSession resumed(config);
+  EXPECT_EQ(resumed.simulation().time(), savedTime);
+  EXPECT_EQ(resumed.simulation().particles().size(), savedCount);
+  EXPECT_EQ(resumed.handPose().position, first.handPose().position);
+  frames(resumed, 3);
+  EXPECT_GT(resumed.simulation().time(), savedTime);
+  resumed.requests().reset = true;
+  resumed.applyRequests();
+  EXPECT_EQ(resumed.simulation().time(), savedTime) << "Reset returns to the saved state";
+  EXPECT_EQ(resumed.error(), "");
+
+  // a state of another scene: the session does not start
+  config.scenePath = engine::assetPath("assets/scenes/tank_rest.json");
+  EXPECT_THROW(engine::AppSession other(config), sim::StateError);
 }
 
 TEST(RobustnessTest, NoGl33FallsBackToHeadlessInOneLine) {
