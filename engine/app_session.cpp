@@ -87,13 +87,13 @@ void AppSession::build() {
   std::string stateNote;
   if (!m_config.statePath.empty()) {
     try {
-      const std::vector<double> hand = sim::loadState(m_config.statePath, *simulation);
-      if (hand.size() == 9) {
+      const std::vector<double> saved = sim::loadState(m_config.statePath, *simulation);
+      if (saved.size() == 9) {
         input::HandPose pose;
-        pose.position = sim::Vec3d(hand[0], hand[1], hand[2]);
-        pose.orientation = sim::Quatd(hand[3], hand[4], hand[5], hand[6]).normalized();
-        pose.grip = std::clamp(hand[7], 0.0, 1.0);
-        pose.point = std::clamp(hand[8], 0.0, 1.0);
+        pose.position = sim::Vec3d(saved[0], saved[1], saved[2]);
+        pose.orientation = sim::Quatd(saved[3], saved[4], saved[5], saved[6]).normalized();
+        pose.grip = std::clamp(saved[7], 0.0, 1.0);
+        pose.point = std::clamp(saved[8], 0.0, 1.0);
         if (pose.position.allFinite() && pose.orientation.coeffs().allFinite())
           savedPose = pose;
       }
