@@ -81,7 +81,7 @@ TEST(RobustnessTest, PresetThatIsNotJsonOrHasWrongTypesRangesKeys) {
   const std::string path = (dir / "preset.json").string();
   const std::pair<const char*, const char*> cases[] = {
       {"{\"mode\": \"fluidplaying\",", "invalid JSON"},
-      {"[1, 2, 3]", "JSON object"},
+      {"[1, 2, 3]", "object"},
       {"{\"parameters\": {\"viscosity\": \"high\"}}", "viscosity"},
       {"{\"parameters\": {\"gravity\": [0, -9.81]}}", "gravity"},
       {"{\"parameters\": {\"viscosity\": 7}}", "viscosity"},
@@ -169,7 +169,10 @@ TEST(RobustnessTest, OpenAndEmptyMeshes) {
 
 /// exit status of `ENV fluidplaying ARGS`, its error output in `err`
 int runExe(const std::string& args, std::string& err, const std::string& env = "") {
-  const fs::path log = fs::temp_directory_path() / "fp_robustness_stderr.txt";
+  // one log per test: ctest runs the tests in parallel
+  const fs::path log =
+      fs::temp_directory_path() / (std::string("fp_robustness_") +
+                                   ::testing::UnitTest::GetInstance()->current_test_info()->name() + ".txt");
   const std::string cmd =
       env + " " + std::string(FP_FLUIDPLAYING_EXE) + " " + args + " > /dev/null 2> " + log.string();
   const int status = std::system(cmd.c_str());
