@@ -217,14 +217,14 @@ void renderControls(render::RenderSettings& s, std::string& message) {
   }
 }
 
-void presetControls(AppSession& session, PanelState& state) {
+void presetControls(AppSession& session, PanelState& state, render::RenderSettings& settings) {
   static char path[256];
   std::snprintf(path, sizeof(path), "%s", state.presetPath.c_str());
   if (ImGui::InputText("preset file", path, sizeof(path)))
     state.presetPath = path;
   if (ImGui::Button("Save preset")) {
     try {
-      savePreset(state.presetPath, Preset{session.mode(), session.editParams()});
+      savePreset(state.presetPath, Preset{session.mode(), session.editParams(), settings});
       state.message = "preset saved to " + state.presetPath;
     } catch (const sim::InputError& e) {
       state.message = e.what();
@@ -233,8 +233,9 @@ void presetControls(AppSession& session, PanelState& state) {
   ImGui::SameLine();
   if (ImGui::Button("Load preset")) {
     try {
-      const Preset p = loadPreset(state.presetPath, Preset{session.mode(), session.editParams()});
+      const Preset p = loadPreset(state.presetPath, Preset{session.mode(), session.editParams(), settings});
       session.editParams() = p.params;
+      settings = p.render;
       if (p.mode != session.mode())
         session.requests().mode = p.mode;
       state.message = "preset loaded from " + state.presetPath;
@@ -302,7 +303,7 @@ void drawPanel(AppSession& session, PanelState& state, render::RenderSettings& s
   if (ImGui::CollapsingHeader("rendering"))
     renderControls(settings, state.message);
   if (ImGui::CollapsingHeader("presets"))
-    presetControls(session, state);
+    presetControls(session, state, settings);
   if (!state.message.empty())
     ImGui::TextWrapped("%s", state.message.c_str());
   ImGui::PopItemWidth();

@@ -94,6 +94,8 @@ class HandModel {
   double segmentLength(int f, int s) const { return m_length[f][s] * m_scale; }
   /// distance from the palm centre down to the tip of the straight middle finger [m]
   double reachBelowPalm() const;
+  /// half extents of the palm box in the hand frame [m]
+  sim::Vec3d palmHalfExtents() const { return m_palmHalf * m_scale; }
 
  private:
   double m_scale;

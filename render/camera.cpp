@@ -30,6 +30,31 @@ Mat4 perspective(float fovY, float aspect, float zNear, float zFar) {
   return m;
 }
 
+Mat4 offAxisPerspective(const FieldOfView& fov, float zNear, float zFar) {
+  // the frustum's sides at the near plane
+  const float left = zNear * std::tan(fov.angleLeft);
+  const float right = zNear * std::tan(fov.angleRight);
+  const float down = zNear * std::tan(fov.angleDown);
+  const float up = zNear * std::tan(fov.angleUp);
+  Mat4 m = Mat4::Zero();
+  m(0, 0) = 2.0f * zNear / (right - left);
+  m(0, 2) = (right + left) / (right - left);
+  m(1, 1) = 2.0f * zNear / (up - down);
+  m(1, 2) = (up + down) / (up - down);
+  m(2, 2) = (zFar + zNear) / (zNear - zFar);
+  m(2, 3) = 2.0f * zFar * zNear / (zNear - zFar);
+  m(3, 2) = -1.0f;
+  return m;
+}
+
+Mat4 viewFromPose(const Eigen::Vector3f& position, const Eigen::Quaternionf& orientation) {
+  const Eigen::Matrix3f toEye = orientation.normalized().toRotationMatrix().transpose();
+  Mat4 m = Mat4::Identity();
+  m.block<3, 3>(0, 0) = toEye;
+  m.block<3, 1>(0, 3) = -toEye * position;
+  return m;
+}
+
 Eigen::Vector3f OrbitCamera::eye() const {
   const Eigen::Vector3f dir(std::cos(pitch) * std::sin(yaw), std::sin(pitch),
                             std::cos(pitch) * std::cos(yaw));

@@ -15,6 +15,24 @@ Mat4 lookAt(const Eigen::Vector3f& eye, const Eigen::Vector3f& target, const Eig
 /// OpenGL perspective projection; fovY in radians, clip depths in [-1, 1].
 Mat4 perspective(float fovY, float aspect, float zNear, float zFar);
 
+/// An asymmetric field of view as a headset reports it per eye (XrFovf): the angles of the frustum's four
+/// sides from the view axis [rad], left and down negative for a view axis inside the frustum, each in
+/// (-pi/2, pi/2), left < right, down < up.
+struct FieldOfView {
+  float angleLeft = -0.8f;  ///< [rad]
+  float angleRight = 0.8f;  ///< [rad]
+  float angleUp = 0.8f;     ///< [rad]
+  float angleDown = -0.8f;  ///< [rad]
+};
+
+/// Off-axis OpenGL projection of an asymmetric field of view (the frustum through the four angles at the near
+/// plane), clip depths in [-1, 1]; 0 < zNear < zFar [m]. A symmetric `fov` gives perspective()'s matrix.
+Mat4 offAxisPerspective(const FieldOfView& fov, float zNear, float zFar);
+
+/// View matrix (world -> eye) of an eye at `position` [m] with orientation `orientation` (eye -> world; the
+/// eye looks down its -z, +y up), as a headset reports a view pose.
+Mat4 viewFromPose(const Eigen::Vector3f& position, const Eigen::Quaternionf& orientation);
+
 /// A camera orbiting a target: yaw and pitch in radians, distance in metres.
 struct OrbitCamera {
   Eigen::Vector3f target{0.0f, 0.0f, 0.0f};  ///< point looked at [m]

@@ -22,8 +22,14 @@ ProcLoader g_loader = nullptr;
 using GlxGetProc = Proc (*)(const GLubyte*);
 
 GlxGetProc realGlxGetProcAddress() {
+  // libGL's definition: the next one after this executable's, or libGL itself when the executable does not
+  // link it (an OpenXR runtime may be what loads it)
   static const GlxGetProc real = [] {
     void* symbol = dlsym(RTLD_NEXT, "glXGetProcAddressARB");
+    if (!symbol) {
+      if (void* libgl = dlopen("libGL.so.1", RTLD_LAZY | RTLD_LOCAL))
+        symbol = dlsym(libgl, "glXGetProcAddressARB");
+    }
     GlxGetProc fn = nullptr;
     static_assert(sizeof(fn) == sizeof(symbol), "function and object pointers differ in size");
     std::memcpy(&fn, &symbol, sizeof(fn));
@@ -81,15 +87,41 @@ void checkError(const char* where) {
 
 }  // namespace fp::render::gl
 
+namespace fp::render::gl {
+
+Proc glxProcAddress(const char* name) {
+  const GlxGetProc real = realGlxGetProcAddress();
+  return real ? real(reinterpret_cast<const GLubyte*>(name)) : nullptr;
+}
+
+namespace {
+
+/// true when `caller` (a return address) lies in the module that holds GLEW's code: the shared libGLEW, or
+/// the executable when GLEW is linked statically
+bool calledFromGlew(const void* caller) {
+  static const void* glewModule = [] {
+    Dl_info info{};
+    void* init = dlsym(RTLD_DEFAULT, "glewInit");
+    return init && dladdr(init, &info) ? info.dli_fbase : nullptr;
+  }();
+  Dl_info info{};
+  return glewModule && dladdr(caller, &info) && info.dli_fbase == glewModule;
+}
+
+}  // namespace
+}  // namespace fp::render::gl
+
 // GLEW looks functions up through glXGetProcAddressARB. Defining it here, in the executable, interposes on
-// libGL's: with an OSMesa or EGL context loaded it asks that context's provider, otherwise it forwards to the
-// real GLX lookup (a desktop window), so GLFW and GLX keep working.
+// libGL's for the whole process, so only GLEW's own lookups are answered by the loaded context's provider
+// (OSMesa, EGL): every other caller (an OpenXR runtime creating swapchain textures in the app's GLX context,
+// a driver, a library) gets libGL's real GLX lookup, as it would without this definition. GLX's own functions
+// always come from libGL.
 extern "C" __attribute__((visibility("default"))) fp::render::gl::Proc glXGetProcAddressARB(
     const GLubyte* name) {
   using namespace fp::render::gl;
-  // GLX's own functions (GLEW probes them after the GL ones) always come from the real libGL
+  const void* caller = __builtin_extract_return_addr(__builtin_return_address(0));
   const bool glx = std::strncmp(reinterpret_cast<const char*>(name), "glX", 3) == 0;
-  if (g_loader && !glx)
+  if (g_loader && !glx && calledFromGlew(caller))
     return g_loader(reinterpret_cast<const char*>(name));
   const GlxGetProc real = realGlxGetProcAddress();
   return real ? real(name) : nullptr;

@@ -23,6 +23,10 @@ using ProcLoader = Proc (*)(const char* name);
 /// when the context lacks OpenGL 3.3 core or a required function.
 void loadFunctions(ProcLoader loader);
 
+/// libGL's own glXGetProcAddressARB (never the process-wide replacement of render/gl_api.cpp): the loader of
+/// a GLX context; null when libGL is not loaded
+Proc glxProcAddress(const char* name);
+
 /// "4.5 (Core Profile) Mesa 22.3.6, llvmpipe (LLVM 15.0.6, 256 bits)"
 std::string versionString();
 

@@ -66,7 +66,7 @@ struct ParamEntry {
 };
 
 /// Calls f(value&) with a reference to the parameter's value in `s`, typed double, float, int, bool,
-/// std::uint64_t, std::array<double, 3> or Choice (a Choice written by f is stored back). Returns f's result.
+/// std::uint64_t, std::array<double, 3> or Choice (stored back when f returns: edit it, call no setter).
 template <class S, class F>
 decltype(auto) visit(const ParamEntry<S>& e, S& s, F&& f) {
   return std::visit(

@@ -463,11 +463,16 @@ TEST_F(PresetFileTest, RoundTripsEveryParameter) {
   p.params.dtMin = 1.0 / 7.0 * 1e-4;
   p.params.seed = 4294967295u;
   p.params.divergenceSolve = false;
+  p.render.view = render::RenderSettings::View::Particles;
+  p.render.colorField = render::ColorField::Omega;
+  p.render.highlightDuration = 1.25f;
   savePreset(m_path, p);
   const Preset q = loadPreset(m_path, Preset{});
   EXPECT_EQ(q.mode, p.mode);
   for (const sim::ParamInfo& info : sim::ParamTable::sim().entries())
     EXPECT_TRUE(sim::ParamTable::equal(info, p.params, q.params)) << info.key;
+  EXPECT_TRUE(render::RenderSettingsTable::get().allEqual(p.render, q.render));
+  EXPECT_EQ(q.render.colorField, render::ColorField::Omega);
 }
 
 TEST_F(PresetFileTest, KeysLeftOutKeepTheBase) {
@@ -495,6 +500,11 @@ TEST_F(PresetFileTest, ErrorsNameThePath) {
             "$.parameters.warm_start: expected a boolean, got a number");
   EXPECT_EQ(errorOfPreset(R"({"parameters": {"gravity": [0, "x", 0]}})"),
             "$.parameters.gravity[1]: expected a number, got a string");
+  EXPECT_EQ(errorOfPreset(R"({"render": {"veiw": "particles"}})")
+                .rfind("$.render.veiw: unknown render setting (did you mean view?) (known: view, ", 0),
+            0u);
+  EXPECT_EQ(errorOfPreset(R"({"render": {"view": "water"}})"),
+            "$.render.view: view: expected fluid or particles, got 'water'");
   EXPECT_EQ(errorOfPreset(R"({"mode": "adaptive"})"),
             "$.mode: expected one of " + std::string(sim::modeNames()) + ", got 'adaptive'");
   EXPECT_EQ(errorOfPreset(R"({"parameters": {"dt_min": 0.01, "dt_max": 0.001}})"),
