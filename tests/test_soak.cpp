@@ -1,7 +1,7 @@
 // Soak of the hand tank in fluidplaying mode under the aggressive recorded hand (assets/hands/aggressive.csv,
 // repeated): at every frame end no NaN, no particle out of the tank, the total mass to 1e-6, the particle
 // count between the share floor (two fine layers at the surface) and the uniform-high count, no fluid
-// particle inside a hand collider, the density error bounded; memory flat after the start. Soak.ThirtySeconds
+// particle inside a hand collider, the density error bounded; memory flat after the start. Soak.TwelveSeconds
 // runs by default (label physics); Soak.TenMinutes is label soak, outside the default run: ctest --test-dir
 // build -C soak -L soak. Soak.LiveParameterSweep drags every live parameter of the panel from its minimum to
 // its maximum and back while the hand plays.
