@@ -1,23 +1,25 @@
 #include "engine/app_loop.h"
 
-#include <chrono>
-
 namespace fp::engine {
 
 int runAppLoop(AppSession& session, AppPlatform& platform, std::optional<int> frames) {
-  using Clock = std::chrono::steady_clock;
-  auto last = Clock::now();
   int frame = 0;
-  for (; (!frames || frame < *frames) && platform.running(); ++frame) {
-    const auto now = Clock::now();
-    const double wallDt = std::chrono::duration<double>(now - last).count();
-    last = now;
+  while ((!frames || frame < *frames) && platform.running()) {
+    const FrameClock clock = platform.beginFrame();
     session.finishSteps();
-    platform.input(session, wallDt);
+    if (clock.restart) {
+      platform.restart(session);
+      continue;
+    }
+    platform.input(session, clock);
     session.applyRequests();
-    platform.capture(session, frame);
-    session.startSteps(wallDt, platform.stepBudget());
-    platform.draw(session, frame);
+    if (clock.render)
+      platform.capture(session, frame);
+    if (clock.simulate)
+      session.startSteps(clock.dt, platform.stepBudget());
+    if (clock.render)
+      platform.draw(session, frame);
+    ++frame;
   }
   session.finishSteps();
   return frame;

@@ -1,10 +1,11 @@
 #pragma once
-/// The one frame loop of the interactive modes. The desktop window, the headless hand replay and (later) the
-/// OpenXR headset are platforms: they differ only in the edges the loop calls (input, taking the frame,
-/// drawing). Every frame:
+/// The one frame loop of every mode. The desktop window, the headless runs (a scene alone, or a recorded hand
+/// replayed) and the OpenXR headset are platforms: they differ only in the edges the loop calls (the frame's
+/// timing, input, taking the frame, drawing). Every frame:
 ///
-///   finish the previous frame's steps -> input (events, panel, hand) -> apply requests and live parameters
-///   -> capture the idle state for drawing -> start this frame's steps on the TBB workers -> draw and present
+///   the platform's timing -> finish the previous frame's steps -> input (events, panel, hand) -> apply
+///   requests and live parameters -> capture the idle state -> start this frame's steps on the TBB workers
+///   -> draw and present
 ///
 /// so the simulation runs while the frame is drawn from the last completed state.
 
@@ -15,23 +16,41 @@
 
 namespace fp::engine {
 
+/// What the platform gives one frame: the time it covers, and whether to step the simulation and draw.
+struct FrameClock {
+  /// time the frame covers [s]: the wall time since the last frame (desktop), one frame of the scene
+  /// (headless), the predicted display period (headset); the session scales it (or, in fixed steps, advances
+  /// one frame of the scene)
+  double dt = 0.0;
+  bool simulate = true;  ///< start solver steps this frame
+  bool render = true;    ///< capture and draw this frame (false: a frame the display does not show)
+  bool restart = false;  ///< the platform lost its session: the loop joins the steps and calls restart()
+};
+
 /// The edges of the loop.
 class AppPlatform {
  public:
   virtual ~AppPlatform() = default;
-  /// false once the user closed the window or asked to quit
+  /// false once the user closed the window, asked to quit, or the run reached its end
   virtual bool running() = 0;
+  /// the coming frame's timing (desktop: the wall clock; headless: a fixed step; headset: the predicted
+  /// display time); called first in every frame, while the last frame's steps may still run
+  virtual FrameClock beginFrame() = 0;
   /// events and controls of the frame: hand target, requests, parameter edits; the simulation is idle
-  virtual void input(AppSession& session, double wallDt) = 0;
-  /// takes what the frame shows from the idle simulation (particle upload, spray, statistics)
+  virtual void input(AppSession& session, const FrameClock& clock) = 0;
+  /// takes what the frame shows from the idle simulation (particle upload, spray, statistics, export)
   virtual void capture(AppSession& session, int frame) = 0;
   /// draws and presents the frame while the simulation steps
   virtual void draw(AppSession& session, int frame) = 0;
   /// wall time the coming frame's steps may take [s] (infinite: all of the frame's simulated time)
   virtual double stepBudget() const { return std::numeric_limits<double>::infinity(); }
+  /// starts the platform's session again after beginFrame asked for it (a lost headset session); the
+  /// simulation is idle
+  virtual void restart(AppSession&) {}
 };
 
-/// Runs the loop until the platform stops or `frames` frames were drawn; returns the frames drawn.
+/// Runs the loop until the platform stops or `frames` frames were counted; returns the frames counted (a
+/// frame that restarts the platform does not count).
 int runAppLoop(AppSession& session, AppPlatform& platform, std::optional<int> frames);
 
 }  // namespace fp::engine

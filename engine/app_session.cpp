@@ -6,7 +6,6 @@
 
 #include "engine/cli.h"
 #include "engine/scene_loader.h"
-#include "sim/state_io.h"
 
 namespace fp::engine {
 
@@ -80,37 +79,17 @@ void AppSession::build() {
   scene.mode = m_mode;
   const input::HandModel model(m_config.handScale);
   const input::HandPose rest = restingHandPose(m_scene, model);
-  const input::HandDriver hand = input::HandDriver::attach(scene, model, rest);
+  const input::HandDriver hand =
+      m_config.hand ? input::HandDriver::attach(scene, model, rest) : input::HandDriver(model, 0);
   // built aside first: a scene that fails to build leaves the running simulation as it was
   auto simulation = std::make_unique<sim::Simulation>(scene);
-  std::optional<input::HandPose> savedPose;
-  std::string stateNote;
-  if (!m_config.statePath.empty()) {
-    try {
-      const std::vector<double> saved = sim::loadState(m_config.statePath, *simulation);
-      if (saved.size() == 9) {
-        input::HandPose pose;
-        pose.position = sim::Vec3d(saved[0], saved[1], saved[2]);
-        pose.orientation = sim::Quatd(saved[3], saved[4], saved[5], saved[6]).normalized();
-        pose.grip = std::clamp(saved[7], 0.0, 1.0);
-        pose.point = std::clamp(saved[8], 0.0, 1.0);
-        if (pose.position.allFinite() && pose.orientation.coeffs().allFinite())
-          savedPose = pose;
-      }
-    } catch (const sim::StateError& e) {
-      if (!m_sim)
-        throw;  // the state asked for at the start must fit
-      // a rebuild in another mode or with other parameters starts from the scene instead
-      stateNote = std::string("the saved state does not fit this scene and these settings: ") + e.what();
-    }
-  }
   m_restPose = rest;
   m_hand = hand;
   m_sim = std::move(simulation);
-  m_handPose = savedPose ? *savedPose : m_restPose;
-  m_handTarget = m_handPose;
+  m_handPose = m_restPose;
+  m_handTarget = m_restPose;
   m_segment = input::PoseTrack();
-  m_mouseHand.place(m_handPose);
+  m_mouseHand.place(m_restPose);
   // the palm stays where the fingers remain inside the domain
   const sim::Vec3d margin(0.05, 0.3 * model.reachBelowPalm(), 0.05);
   m_mouseHand.lo = scene.domain.min() + margin;
@@ -118,7 +97,7 @@ void AppSession::build() {
   if (m_replay)
     m_replayStart = 0.0;
   m_stats.uniformHighCount = double(m_sim->totalMass() / m_sim->latticeMass());
-  m_targetTime = m_sim->time();
+  m_targetTime = 0.0;
   m_stepsBefore = 0;
   m_splitsBefore = 0;
   m_mergesBefore = 0;
@@ -126,7 +105,7 @@ void AppSession::build() {
   m_simTotal = 0.0;
   m_restartPending = false;
   m_handScalePending = false;
-  m_error = stateNote;
+  m_error.clear();
   m_lastFinish = Clock::now();
 }
 
@@ -158,13 +137,6 @@ input::PoseTrack AppSession::stopRecording() {
   input::PoseTrack out = m_recording ? std::move(*m_recording) : input::PoseTrack();
   m_recording.reset();
   return out;
-}
-
-void AppSession::saveState(const std::string& path) const {
-  const input::HandPose& h = m_handPose;
-  sim::saveState(path, *m_sim,
-                 {h.position.x(), h.position.y(), h.position.z(), h.orientation.w(), h.orientation.x(),
-                  h.orientation.y(), h.orientation.z(), h.grip, h.point});
 }
 
 double AppSession::meanRealTimeFactor() const {
@@ -313,6 +285,7 @@ void AppSession::startSteps(double wallDt, double budget) {
     m_targetTime += wallDt * timeScale;
     target = m_targetTime;
   }
+  target = std::min(target, m_endTime);
   // the frame's hand motion: from where the hand is to the new target at the frame's end
   if (!m_replay) {
     m_segment = input::PoseTrack();
@@ -338,7 +311,8 @@ void AppSession::runSteps(double target, double budget, bool oneStep) {
       // never ahead of the wall clock: stop when the next step would pass the target (fixed steps finish it)
       if (!fixedStep && !oneStep && simulation.time() + estimate > target + 1e-12)
         break;
-      m_hand.apply(simulation, motion, trackStart, estimate);
+      if (m_config.hand)
+        m_hand.apply(simulation, motion, trackStart, estimate);
       simulation.step();
       ++m_taskSteps;
       if (oneStep || seconds(Clock::now() - start) > budget)

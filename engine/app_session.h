@@ -13,6 +13,7 @@
 #include <chrono>
 #include <cstdint>
 #include <deque>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -35,7 +36,7 @@ struct SessionConfig {
   bool fixedStep = false;             ///< every frame advances exactly 1 / frame_rate of simulated time
   double timeScale = 1.0;             ///< simulated seconds per wall second wanted, in (0, 4]
   double handScale = 1.0;             ///< hand size factor (1: adult)
-  std::string statePath;  ///< saved state (sim/state_io.h) the session starts from and Reset returns to
+  bool hand = true;                   ///< attach the virtual hand (false: the scene alone)
 };
 
 /// A time series for the panel's plots: the last `capacity` values.
@@ -127,6 +128,8 @@ class AppSession {
   double handScale() const { return m_config.handScale; }
   /// sets the hand size factor in [0.5, 3], applied at the next reset (the hand's colliders are rebuilt)
   void setHandScale(double scale);
+  /// the steps never pass simulated time `t` [s] (a run's end; default: none)
+  void setEndTime(double t) { m_endTime = t; }
   /// the instability report that paused the run, if any
   const std::string& error() const { return m_error; }
 
@@ -150,9 +153,6 @@ class AppSession {
   /// the frames' simulated-time targets keep the hand: the pose the mouse hand has now is where the hand is
   /// at the end of the coming frame's steps
   void setHandTarget(const input::HandPose& pose) { m_handTarget = pose; }
-
-  /// writes the simulation's state and the hand's pose (sim/state_io.h); throws sim::InputError
-  void saveState(const std::string& path) const;
 
   /// the mean real-time factor since construction or the last reset (simulated / wall time)
   double meanRealTimeFactor() const;
@@ -186,6 +186,7 @@ class AppSession {
   tbb::task_group m_task;
   bool m_running = false;
   double m_targetTime = 0.0;
+  double m_endTime = std::numeric_limits<double>::infinity();
   double m_frameStartSim = 0.0;
   std::uint64_t m_stepsBefore = 0;
   std::uint64_t m_splitsBefore = 0;

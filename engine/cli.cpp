@@ -3,13 +3,17 @@
 #include <tbb/global_control.h>
 #include <tbb/info.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <iomanip>
+#include <sstream>
 #include <stdexcept>
 
 #include "engine/cli_app.h"
 #include "render/fluid_renderer.h"
 #include "render/particle_colors.h"
+#include "render/render_settings.h"
 #include "sim/params.h"
 #include "sim/scene.h"
 
@@ -46,6 +50,17 @@ double parsePositive(const std::string& flag, const std::string& text) {
 }
 
 namespace {
+
+// a Choice entry of the render settings' table, checked against its names
+CLI::Validator tableChoice(const std::string& key) {
+  const std::vector<std::string>& names = render::RenderSettingsTable::get().at(key).choices;
+  std::string list;
+  for (std::size_t k = 0; k < names.size(); ++k)
+    list += (k ? k + 1 == names.size() ? " or " : ", " : "") + names[k];
+  return choiceOf(list, [&names](const std::string& v) {
+    return std::find(names.begin(), names.end(), v) != names.end();
+  });
+}
 
 // The declaration of fluidplaying's command line: every option once, with its type, range and help. Checks
 // that depend on the mode (window, headless, --render) follow the parse.
@@ -133,23 +148,6 @@ struct Declaration {
     app.add_option("--stats", o.statsPath, "write the run's statistics as JSON")
         ->type_name("FILE.json")
         ->group(headless);
-    CLI::Option* saveState =
-        app.add_option(
-               "--save-state", o.saveState,
-               "write the simulation state (sim/state_io.h) and the hand's pose at the end of the run "
-               "(window too); resumed with --load-state, a headless run is bit-identical on one thread")
-            ->type_name("FILE")
-            ->group(run);
-    line.addInteger(
-            "--save-every", [&o](long long n) { o.saveEvery = int(n); }, 1, 100000000,
-            "with --save-state: write it every N frames too")
-        ->group(headless)
-        ->needs(saveState);
-    app.add_option("--load-state", o.loadState,
-                   "start from a state written by --save-state (same scene, --mode, --seed, --set and "
-                   "--hand-size); the window's Reset returns to it")
-        ->type_name("FILE")
-        ->group(run);
     app.add_option("--export", o.exportDir, "write the particles of every frame as binary PLY into DIR")
         ->type_name("DIR")
         ->group(headless);
@@ -176,26 +174,29 @@ struct Declaration {
                              ->group(view_));
     }
     view = app.add_option("--view", o.view,
-                          "fluid (screen-space water, default) or particles (spheres coloured by --color)")
+                          "fluid (screen-space water, default) or particles (spheres coloured by --color); "
+                          "--set view=NAME")
                ->type_name("NAME")
-               ->check(choiceOf("fluid or particles",
-                                [](const std::string& v) { return v == "fluid" || v == "particles"; }))
+               ->check(tableChoice("view"))
                ->group(view_);
     viewOnly.push_back(view);
     color = app.add_option("--color", o.colorField,
                            "particle view colour: " + std::string(render::colorFieldNames()) +
-                               " (default nu); implies --view particles")
+                               " (default nu); implies --view particles; --set color_field=FIELD")
                 ->type_name("FIELD")
-                ->check(choiceOf(render::colorFieldNames(),
-                                 [](const std::string& c) { return bool(render::parseColorField(c)); }))
+                ->check(tableChoice("color_field"))
                 ->group(view_);
     viewOnly.push_back(color);
     viewOnly.push_back(
         line.addNumber(
-                "--highlight-time", [&o](double s) { o.highlightTime = s; }, 0.0, 1e6,
-                "tint split children red for S seconds after their split (default 0.5; 0: off)")
+                "--highlight-time", [&o](double s) { o.highlightTime = s; }, 0.0,
+                render::RenderSettingsTable::get().at("highlight_duration").max,
+                "tint split children red for S seconds after their split (default 0.5; 0: off); --set "
+                "highlight_duration=S")
             ->group(view_));
-    viewOnly.push_back(app.add_flag("--no-spray", o.noSpray, "do not draw splash particles")->group(view_));
+    viewOnly.push_back(
+        app.add_flag("--no-spray", o.noSpray, "do not draw splash particles; --set show_spray=false")
+            ->group(view_));
     viewOnly.push_back(app.add_option("--shaders", o.shaderDir,
                                       "GLSL folder (default: shaders/ here, else the source tree's)")
                            ->type_name("DIR")
@@ -222,6 +223,14 @@ CliOptions parseCommandLine(const std::vector<std::string>& args) {
   }
   if (o.render)
     o.headless = true;
+  // --set names a simulation parameter or a render setting: each goes to its own table
+  std::vector<std::string> sets;
+  for (const std::string& kv : o.sets)
+    (isRenderSetting(kv) ? o.renderSets : sets).push_back(kv);
+  o.sets = std::move(sets);
+  if (!o.renderSets.empty() && o.headless && !o.render)
+    throw std::invalid_argument("--set " + o.renderSets.front() +
+                                ": a render setting needs --render (or the window, without --headless)");
   auto firstGiven = [](const std::vector<CLI::Option*>& options) -> const CLI::Option* {
     for (const CLI::Option* option : options)
       if (option->count() > 0)
@@ -232,8 +241,6 @@ CliOptions parseCommandLine(const std::vector<std::string>& args) {
     throw std::invalid_argument(v->get_name() + " needs --render (or the window, without --headless)");
   if (const CLI::Option* w = firstGiven(d.windowOnly); w && o.headless)
     throw std::invalid_argument(w->get_name() + " applies to the window, not --headless");
-  if (o.saveEvery > 0 && (!o.headless || !o.handScript.empty()))
-    throw std::invalid_argument("--save-every applies to the headless runner (without --hand-script)");
   if (!o.headless && o.simTime)
     throw std::invalid_argument("--sim-time needs --headless (the window runs until closed or --frames)");
   if (o.render && o.outDir.empty())
@@ -250,6 +257,29 @@ CliOptions parseCommandLine(const std::vector<std::string>& args) {
 
 std::string applySetting(sim::SimParams& params, const std::string& keyValue) {
   return sim::ParamTable::sim().assign(params, keyValue);
+}
+
+bool isRenderSetting(const std::string& keyValue) {
+  const std::string key = keyValue.substr(0, keyValue.find('='));
+  return !sim::ParamTable::sim().find(key) && render::RenderSettingsTable::get().find(key);
+}
+
+std::string checkSetting(const std::string& keyValue) {
+  if (isRenderSetting(keyValue)) {
+    render::RenderSettings scratch;
+    return render::RenderSettingsTable::get().assign(scratch, keyValue);
+  }
+  sim::SimParams scratch;
+  std::string error = sim::ParamTable::sim().assign(scratch, keyValue);
+  const std::size_t eq = keyValue.find('=');
+  if (!error.empty() && eq != std::string::npos && eq > 0 &&
+      !sim::ParamTable::sim().find(keyValue.substr(0, eq))) {
+    // neither table knows the key: suggest the closest of either
+    const std::string render = render::RenderSettingsTable::get().unknownKey(keyValue.substr(0, eq));
+    if (error.find("did you mean") == std::string::npos && render.find("did you mean") != std::string::npos)
+      error = render;
+  }
+  return error;
 }
 
 void applySettings(sim::SimParams& params, const std::vector<std::string>& keyValues) {
@@ -274,18 +304,26 @@ void overrideScene(sim::SceneDesc& scene, const SceneOverrides& overrides) {
   applySettings(scene.params, overrides.sets);
 }
 
-void applyRenderOptions(const CliOptions& options, render::RenderSettings& s) {
-  if (options.view == "particles") {
-    s.view = render::RenderSettings::View::Particles;
-    if (!options.colorField.empty())
-      s.colorField = *render::parseColorField(options.colorField);
-  }
+void applyRenderOptions(const CliOptions& options, render::RenderSettings& settings) {
+  std::vector<std::string> sets;
+  if (options.view != "fluid")
+    sets.push_back("view=" + options.view);
+  if (!options.colorField.empty())
+    sets.push_back("color_field=" + options.colorField);
   if (options.highlightTime) {
-    s.highlightSplits = *options.highlightTime > 0.0;
-    if (s.highlightSplits)
-      s.highlightDuration = float(*options.highlightTime);
+    sets.push_back(*options.highlightTime > 0.0 ? "highlight_splits=true" : "highlight_splits=false");
+    if (*options.highlightTime > 0.0) {
+      std::ostringstream duration;
+      duration << std::setprecision(17) << *options.highlightTime;
+      sets.push_back("highlight_duration=" + duration.str());
+    }
   }
-  s.showSpray = !options.noSpray;
+  if (options.noSpray)
+    sets.push_back("show_spray=false");
+  sets.insert(sets.end(), options.renderSets.begin(), options.renderSets.end());
+  const std::string error = render::RenderSettingsTable::get().assignAll(settings, sets);
+  if (!error.empty())
+    throw std::invalid_argument("--set: " + error);
 }
 
 struct ThreadLimit::Control {

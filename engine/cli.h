@@ -33,15 +33,13 @@ struct CliOptions {
   std::optional<int> frames;      ///< --frames N
   std::optional<double> simTime;  ///< --sim-time S
   int threads = 0;                ///< --threads T (0: all cores)
-  std::optional<std::uint64_t> seed;  ///< --seed N, in the table's range of `seed`
-  std::vector<std::string> sets;      ///< --set KEY=VALUE, in order: parameters over the scene's
-  std::string statsPath;              ///< --stats FILE.json
-  std::string exportDir;              ///< --export DIR
-  bool quiet = false;                 ///< --quiet: no progress lines
-  std::string saveState;              ///< --save-state FILE: the state at the end (sim/state_io.h)
-  int saveEvery = 0;                  ///< --save-every N: --save-state also every N frames (headless runner)
-  std::string loadState;              ///< --load-state FILE: start from a saved state; Reset returns to it
-  std::string mode;                   ///< --mode NAME (empty: the scene's mode)
+  std::optional<std::uint64_t> seed;    ///< --seed N, in the table's range of `seed`
+  std::vector<std::string> sets;        ///< --set KEY=VALUE of simulation parameters, over the scene's
+  std::vector<std::string> renderSets;  ///< --set KEY=VALUE of render settings (render/render_settings)
+  std::string statsPath;                ///< --stats FILE.json
+  std::string exportDir;                ///< --export DIR
+  bool quiet = false;                   ///< --quiet: no progress lines
+  std::string mode;                     ///< --mode NAME (empty: the scene's mode)
   // rendering (headless, through OSMesa)
   bool render = false;                  ///< --render: write a PNG of every frame (implies --headless)
   std::string outDir;                   ///< --out DIR: folder of the PNG files
@@ -81,6 +79,11 @@ std::string usage();
 /// Applies one "KEY=VALUE" to `params`: "" or the table's one-line error (unknown key, type, range).
 /// Relations between parameters are checked by applySettings.
 std::string applySetting(sim::SimParams& params, const std::string& keyValue);
+/// Checks one "KEY=VALUE" of --set against the simulation's table, else the render settings' table: "" or
+/// the table's one-line error (an unknown key names the closest key of either table).
+std::string checkSetting(const std::string& keyValue);
+/// whether "KEY=VALUE" names a render setting (render::RenderSettingsTable) rather than a parameter
+bool isRenderSetting(const std::string& keyValue);
 /// Applies "KEY=VALUE" settings in order, then checks the relations between parameters; throws
 /// std::invalid_argument "--set ...: why" (a bad command line).
 void applySettings(sim::SimParams& params, const std::vector<std::string>& keyValues);
@@ -94,7 +97,9 @@ struct SceneOverrides {
 /// Applies the overrides to a loaded scene; throws std::invalid_argument for a bad mode or setting.
 void overrideScene(sim::SceneDesc& scene, const SceneOverrides& overrides);
 
-/// Sets what the options ask of the renderer (view, colour field, split highlight, spray) in `settings`.
+/// Sets what the options ask of the renderer in `settings`, through the render settings' table: the aliases
+/// --view, --color, --highlight-time and --no-spray, then the render settings of --set in order. Throws
+/// std::invalid_argument for a setting the table refuses.
 void applyRenderOptions(const CliOptions& options, render::RenderSettings& settings);
 
 /// The thread limit of a run: `threads` workers (0: all cores) for as long as it lives.

@@ -77,12 +77,7 @@ CLI::Validator choiceOf(const std::string& names, std::function<bool(const std::
 }
 
 CLI::Validator tableSetting() {
-  return CLI::Validator(
-      [](std::string& text) -> std::string {
-        sim::SimParams scratch;
-        return applySetting(scratch, text);
-      },
-      "");
+  return CLI::Validator([](std::string& text) -> std::string { return checkSetting(text); }, "");
 }
 
 CommandLine::CommandLine(std::string program, const std::string& description)
@@ -134,8 +129,8 @@ CLI::Option* CommandLine::addSet(std::vector<std::string>& sets) {
       .add_option_function<std::vector<std::string>>(
           "--set",
           [&sets](const std::vector<std::string>& kv) { sets.insert(sets.end(), kv.begin(), kv.end()); },
-          "set a parameter of the table over the scene's (repeatable), e.g. --set dt_max=0.002; checked "
-          "for type, range and relations")
+          "set a simulation parameter over the scene's, or a render setting (repeatable), e.g. --set "
+          "dt_max=0.002 --set view=particles; checked by their tables for type, range and relations")
       ->check(tableSetting())
       ->type_name("KEY=VALUE")
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll)

@@ -66,6 +66,7 @@ struct DesktopPlatform::Impl {
   sim::SplashGenerator splash;
   PanelState panel;
   FrameTiming timing;
+  std::optional<Clock::time_point> lastFrame;
   std::string framedScene;
   std::uint64_t framedBuild = ~0ull;
   int uiVertices = 0;
@@ -240,18 +241,7 @@ DesktopPlatform::DesktopPlatform(const CliOptions& options, std::optional<int> f
     glfwTerminate();
     throw;
   }
-  render::RenderSettings& s = m->renderer->settings();
-  if (options.view == "particles") {
-    s.view = render::RenderSettings::View::Particles;
-    if (!options.colorField.empty())
-      s.colorField = *render::parseColorField(options.colorField);
-  }
-  if (options.highlightTime) {
-    s.highlightSplits = *options.highlightTime > 0.0;
-    if (s.highlightSplits)
-      s.highlightDuration = float(*options.highlightTime);
-  }
-  s.showSpray = !options.noSpray;
+  applyRenderOptions(options, m->renderer->settings());
   m->panel.visible = !options.noPanel;
   m->panel.scenes = availableScenes();
   m->screenshotPath = options.screenshot;
@@ -328,7 +318,16 @@ double DesktopPlatform::stepBudget() const {
   return std::clamp(drawing, 1.0 / 60.0, 0.25);
 }
 
-void DesktopPlatform::input(AppSession& session, double wallDt) {
+FrameClock DesktopPlatform::beginFrame() {
+  const auto now = Clock::now();
+  FrameClock clock;
+  clock.dt = m->lastFrame ? std::chrono::duration<double>(now - *m->lastFrame).count() : 0.0;
+  m->lastFrame = now;
+  return clock;
+}
+
+void DesktopPlatform::input(AppSession& session, const FrameClock& clock) {
+  const double wallDt = clock.dt;
   const auto start = Clock::now();
   glfwPollEvents();
   ImGui_ImplOpenGL3_NewFrame();

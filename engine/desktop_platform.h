@@ -42,7 +42,9 @@ class DesktopPlatform : public AppPlatform {
   DesktopPlatform& operator=(const DesktopPlatform&) = delete;
 
   bool running() override;
-  void input(AppSession& session, double wallDt) override;
+  /// the wall clock: the time since the last frame
+  FrameClock beginFrame() override;
+  void input(AppSession& session, const FrameClock& clock) override;
   void capture(AppSession& session, int frame) override;
   void draw(AppSession& session, int frame) override;
   double stepBudget() const override;

@@ -1,33 +1,97 @@
 #include "engine/headless_app.h"
 
-#include <tbb/global_control.h>
-
-#include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iomanip>
 #include <ostream>
 
-#include "engine/headless_render.h"
+#include "sim/metrics.h"
+#include "sim/ply_writer.h"
 
 namespace fp::engine {
 
-struct HeadlessPlatform::Impl {
-  std::unique_ptr<HeadlessRender> render;
-};
+namespace {
+using Clock = std::chrono::steady_clock;
+/// the paper's splash height: the height below which 99.9 % of the mass lies, above its value at rest
+constexpr double kSplashHeightFraction = 0.999;
+}  // namespace
 
-HeadlessPlatform::HeadlessPlatform(const CliOptions& options) : m_impl(std::make_unique<Impl>()) {
-  if (options.render)
-    m_impl->render = std::make_unique<HeadlessRender>(options);
+HeadlessPlatform::HeadlessPlatform(const CliOptions& options, double frameRate, double endTime,
+                                   RunSummary& summary, std::ostream& progress, FrameCallback onFrame)
+    : m_options(options),
+      m_frameDt(1.0 / frameRate),
+      m_endTime(endTime),
+      m_frameCount(int(std::ceil(endTime * frameRate - 1e-9))),
+      m_summary(summary),
+      m_progress(progress),
+      m_onFrame(std::move(onFrame)) {}
+
+FrameClock HeadlessPlatform::beginFrame() {
+  FrameClock clock;
+  clock.dt = m_frameDt;
+  clock.simulate = m_loopFrames++ < m_frameCount;
+  return clock;
 }
 
-HeadlessPlatform::~HeadlessPlatform() = default;
+void HeadlessPlatform::input(AppSession& session, const FrameClock&) {
+  session.setHandTarget(session.handPose());  // the hand rests, or the replay moves it
+}
 
-void HeadlessPlatform::input(AppSession& session, double) {
-  session.setHandTarget(session.handPose());
+double HeadlessPlatform::wallSeconds() const {
+  return std::chrono::duration<double>(Clock::now() - m_start).count();
 }
 
 void HeadlessPlatform::capture(AppSession& session, int frame) {
-  if (m_impl->render)
-    m_impl->render->renderFrame(frame, session.simulation());
+  const sim::Simulation& simulation = session.simulation();
+  if (!session.error().empty()) {
+    m_summary.status = "unstable";
+    m_summary.message = session.error();
+    m_done = true;
+    return;
+  }
+  // a frame is taken when the steps reached its end (a shorter last frame is not)
+  if (frame == 0 || simulation.time() >= (m_frame + 1) * m_frameDt - 1e-12)
+    takeFrame(simulation);
+  if (frame == 0)
+    m_start = m_lastReport = Clock::now();
+  if (frame >= m_frameCount) {
+    m_done = true;
+    return;
+  }
+  const auto now = Clock::now();
+  if (!m_options.quiet && std::chrono::duration<double>(now - m_lastReport).count() > 2.0) {
+    m_lastReport = now;
+    const double wall = std::chrono::duration<double>(now - m_start).count();
+    const double eta = wall / simulation.time() * (m_endTime - simulation.time());
+    m_progress << std::fixed << std::setprecision(3) << "  t = " << simulation.time() << " / " << m_endTime
+               << " s, step " << simulation.stepCount() << ", " << simulation.particles().size()
+               << " particles, wall " << std::setprecision(1) << wall << " s, eta " << eta << " s\n"
+               << std::defaultfloat << std::flush;
+  }
+}
+
+void HeadlessPlatform::takeFrame(const sim::Simulation& simulation) {
+  ++m_frame;
+  if (!m_options.exportDir.empty()) {
+    char name[32];
+    std::snprintf(name, sizeof(name), "frame_%05d.ply", m_frame);
+    sim::writePly((std::filesystem::path(m_options.exportDir) / name).string(), simulation.particles());
+  }
+  const sim::SplashParticles& sp = m_splash.generate(simulation, std::uint64_t(m_frame));
+  const double h = sim::heightPercentile(simulation.particles(), kSplashHeightFraction);
+  const double hs = sim::heightPercentile(simulation.particles(), kSplashHeightFraction, &sp,
+                                          simulation.params().splashCount);
+  if (m_frame == 0)
+    m_restHeight = h;
+  RunSummary& s = m_summary;
+  s.splashParticles += double(sp.size());
+  s.splashHeight += h - m_restHeight;
+  s.splashHeightWithSplash += hs - m_restHeight;
+  s.splashHeightMax = std::max(s.splashHeightMax, h - m_restHeight);
+  s.splashHeightWithSplashMax = std::max(s.splashHeightWithSplashMax, hs - m_restHeight);
+  if (m_onFrame)
+    m_onFrame(m_frame, simulation, sp);
 }
 
 SessionConfig sessionConfigOf(const CliOptions& options) {
@@ -40,49 +104,7 @@ SessionConfig sessionConfigOf(const CliOptions& options) {
   c.fixedStep = options.fixedStep;
   c.timeScale = options.timeScale;
   c.handScale = options.handScale;
-  c.statePath = options.loadState;
   return c;
-}
-
-RunSummary runHeadlessApp(const CliOptions& options, std::ostream& out) {
-  const int threads = int(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
-  SessionConfig config = sessionConfigOf(options);
-  config.fixedStep = true;  // no wall clock without a window: every frame is 1 / frame_rate
-  HeadlessPlatform platform(options);
-  AppSession session(config);
-  const sim::Simulation& simulation = session.simulation();
-  double simTime = session.scene().simTime;
-  if (options.simTime)
-    simTime = *options.simTime;
-  // a loaded state resumes at its frame: the run ends where the uninterrupted one would
-  const int frames =
-      (options.frames ? *options.frames : int(std::ceil(simTime * session.scene().frameRate - 1e-9))) -
-      int(std::lround(simulation.time() * session.scene().frameRate));
-  RunSummary s;
-  s.scene = options.scenePath;
-  s.mode = sim::modeName(simulation.mode());
-  s.threads = threads;
-  s.seed = simulation.params().seed;
-  s.boundaryParticles = simulation.boundary().size();
-  s.massInitial = simulation.totalMass();
-  if (!options.quiet) {
-    out << "scene " << session.scene().name << " (" << s.mode << ") with the hand replaying "
-        << options.handScript << ": " << simulation.particles().size() << " fluid particles, "
-        << simulation.boundary().size() << " boundary particles, " << threads << " threads, " << frames
-        << " frames\n";
-  }
-  const auto start = std::chrono::steady_clock::now();
-  s.frames = frames > 0 ? runAppLoop(session, platform, frames) : 0;
-  s.wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  const sim::Simulation& sim = session.simulation();
-  if (!session.error().empty()) {
-    s.status = "unstable";
-    s.message = session.error();
-  } else if (!options.saveState.empty()) {
-    session.saveState(options.saveState);
-  }
-  fillRunFigures(sim, s);
-  return s;
 }
 
 }  // namespace fp::engine

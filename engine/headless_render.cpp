@@ -30,7 +30,7 @@ Eigen::AlignedBox3f sceneViewBox(const sim::Simulation& simulation) {
 }
 
 HeadlessRender::HeadlessRender(const CliOptions& options)
-    : m_spray(!options.noSpray), m_outDir(options.outDir), m_width(options.width), m_height(options.height) {
+    : m_outDir(options.outDir), m_width(options.width), m_height(options.height) {
   std::error_code ec;
   std::filesystem::create_directories(m_outDir, ec);
   if (ec || !std::filesystem::is_directory(m_outDir))
@@ -39,18 +39,7 @@ HeadlessRender::HeadlessRender(const CliOptions& options)
   m_context = std::make_unique<render::OffscreenContext>(m_width, m_height);
   m_renderer = std::make_unique<render::FluidRenderer>(options.shaderDir.empty() ? render::defaultShaderDir()
                                                                                  : options.shaderDir);
-  render::RenderSettings& s = m_renderer->settings();
-  if (options.view == "particles") {
-    s.view = render::RenderSettings::View::Particles;
-    if (!options.colorField.empty())
-      s.colorField = *render::parseColorField(options.colorField);
-  }
-  if (options.highlightTime) {
-    s.highlightSplits = *options.highlightTime > 0.0;
-    if (s.highlightSplits)
-      s.highlightDuration = float(*options.highlightTime);
-  }
-  s.showSpray = m_spray;
+  applyRenderOptions(options, m_renderer->settings());
 }
 
 HeadlessRender::~HeadlessRender() = default;
@@ -69,7 +58,7 @@ void HeadlessRender::renderFrame(int frame, const sim::Simulation& simulation,
     m_framed = true;
   }
   render::SpraySpan spray;
-  if (m_spray) {
+  if (m_renderer->settings().showSpray) {
     const sim::SplashParticles& s = splash ? *splash : m_splash.generate(simulation, std::uint64_t(frame));
     spray = render::SpraySpan{s.x.data(), s.radius.data(), s.size()};
   }

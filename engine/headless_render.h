@@ -1,7 +1,7 @@
 #pragma once
 /// The headless renderer: an OSMesa context with no display, the fluid renderer and a camera that frames the
 /// scene; called with every frame of the headless run, it writes one PNG a frame, with the frame's splash
-/// particles (sim/splash.h) drawn as spray unless --no-spray was given.
+/// particles (sim/splash.h) drawn as spray unless the settings hide it (--no-spray, --set show_spray=false).
 
 #include <memory>
 #include <string>
@@ -31,7 +31,7 @@ class HeadlessRender {
 
   /// Renders the simulation's current state as frame `frame`; the first call frames the scene. The spray is
   /// `splash` when given (the caller already generated this frame's splash), else generated here from the
-  /// simulation with frame index `frame`; nothing is generated or drawn with --no-spray.
+  /// simulation with frame index `frame`; nothing is generated or drawn when the spray is hidden.
   void renderFrame(int frame, const sim::Simulation& simulation,
                    const sim::SplashParticles* splash = nullptr);
 
@@ -49,7 +49,6 @@ class HeadlessRender {
   std::unique_ptr<render::FluidRenderer> m_renderer;
   render::OrbitCamera m_camera;
   sim::SplashGenerator m_splash;
-  bool m_spray = true;
   std::size_t m_sprayCount = 0;
   bool m_framed = false;
   std::string m_outDir;

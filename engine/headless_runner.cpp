@@ -2,31 +2,13 @@
 
 #include <tbb/global_control.h>
 
-#include <chrono>
-#include <cmath>
-#include <cstdio>
+#include <algorithm>
 #include <filesystem>
 #include <iomanip>
-#include <memory>
 
-#include "engine/scene_loader.h"
-#include "sim/metrics.h"
-#include "sim/ply_writer.h"
-#include "sim/splash.h"
-#include "sim/state_io.h"
+#include "engine/headless_app.h"
 
 namespace fp::engine {
-
-namespace {
-using Clock = std::chrono::steady_clock;
-constexpr double kSplashHeightFraction = 0.999;
-
-void exportFrame(const std::string& dir, int frame, const sim::ParticleSet& particles) {
-  char name[32];
-  std::snprintf(name, sizeof(name), "frame_%05d.ply", frame);
-  sim::writePly((std::filesystem::path(dir) / name).string(), particles);
-}
-}  // namespace
 
 void fillRunFigures(const sim::Simulation& simulation, RunSummary& s) {
   const sim::RunStats& run = simulation.runStats();
@@ -54,100 +36,51 @@ void fillRunFigures(const sim::Simulation& simulation, RunSummary& s) {
 
 RunSummary runHeadless(const CliOptions& options, std::ostream& out, std::ostream& progress,
                        const FrameCallback& onFrame) {
-  sim::SceneDesc scene = loadScene(options.scenePath);
-  overrideScene(scene, {options.mode, options.seed, options.sets});
-  const int threads = int(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
-
-  double simTime = scene.simTime;
-  if (options.simTime)
-    simTime = *options.simTime;
-  if (options.frames)
-    simTime = double(*options.frames) / scene.frameRate;
   if (!options.exportDir.empty()) {
     std::error_code ec;
     std::filesystem::create_directories(options.exportDir, ec);
     if (ec)
       throw sim::InputError(options.exportDir + ": cannot create export directory (" + ec.message() + ")");
   }
+  SessionConfig config = sessionConfigOf(options);
+  config.fixedStep = true;                    // no wall clock: every frame is 1 / frame_rate
+  config.hand = !options.handScript.empty();  // the scene alone, unless a recorded hand plays in it
+  AppSession session(config);
+  const sim::SceneDesc& scene = session.scene();
+  double simTime = scene.simTime;
+  if (options.simTime)
+    simTime = *options.simTime;
+  if (options.frames)
+    simTime = double(*options.frames) / scene.frameRate;
+  session.setEndTime(simTime);
 
-  sim::Simulation simulation(scene);
-  if (!options.loadState.empty())
-    sim::loadState(options.loadState, simulation);
+  const sim::Simulation& simulation = session.simulation();
   RunSummary s;
   s.scene = options.scenePath;
-  s.mode = sim::modeName(scene.mode);
-  s.threads = threads;
-  s.seed = scene.params.seed;
+  s.mode = sim::modeName(simulation.mode());
+  s.threads = int(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
+  s.seed = simulation.params().seed;
   s.boundaryParticles = simulation.boundary().size();
   s.massInitial = simulation.totalMass();
-  out << "scene " << scene.name << " (" << s.mode << "): " << simulation.particles().size()
-      << " fluid particles, " << simulation.boundary().size() << " boundary particles, " << threads
-      << " threads, " << simTime << " s to simulate\n";
-
-  const double frameDt = 1.0 / scene.frameRate;
-  // a loaded state resumes at its frame (states are saved at frame ends)
-  int frame = int(std::lround(simulation.time() / frameDt));
-  // Splash and the height the water reaches are measured every frame (the paper's splash height: the height
-  // below which 99.9 % of the mass lies, above its value at rest, i.e. at frame 0).
-  sim::SplashGenerator splash;
-  double restHeight = 0.0;
-  const int firstFrame = frame;
-  auto measure = [&]() {
-    const sim::SplashParticles& sp = splash.generate(simulation, std::uint64_t(frame));
-    const double h = sim::heightPercentile(simulation.particles(), kSplashHeightFraction);
-    const double hs = sim::heightPercentile(simulation.particles(), kSplashHeightFraction, &sp,
-                                            simulation.params().splashCount);
-    if (frame == firstFrame)
-      restHeight = h;
-    s.splashParticles += double(sp.size());
-    s.splashHeight += h - restHeight;
-    s.splashHeightWithSplash += hs - restHeight;
-    s.splashHeightMax = std::max(s.splashHeightMax, h - restHeight);
-    s.splashHeightWithSplashMax = std::max(s.splashHeightWithSplashMax, hs - restHeight);
-  };
-  if (!options.exportDir.empty())
-    exportFrame(options.exportDir, frame, simulation.particles());
-  measure();
-  if (onFrame)
-    onFrame(frame, simulation);
-  const auto start = Clock::now();
-  auto lastReport = start;
-  try {
-    while (simulation.time() < simTime - 1e-12) {
-      simulation.step();
-      if (simulation.time() >= (frame + 1) * frameDt - 1e-12) {
-        ++frame;
-        if (!options.exportDir.empty())
-          exportFrame(options.exportDir, frame, simulation.particles());
-        measure();
-        if (onFrame)
-          onFrame(frame, simulation);
-        if (options.saveEvery > 0 && frame % options.saveEvery == 0)
-          sim::saveState(options.saveState, simulation);
-      }
-      const auto now = Clock::now();
-      if (!options.quiet && std::chrono::duration<double>(now - lastReport).count() > 2.0) {
-        lastReport = now;
-        const double wall = std::chrono::duration<double>(now - start).count();
-        const double eta = wall / simulation.time() * (simTime - simulation.time());
-        progress << std::fixed << std::setprecision(3) << "  t = " << simulation.time() << " / " << simTime
-                 << " s, step " << simulation.stepCount() << ", " << simulation.particles().size()
-                 << " particles, wall " << std::setprecision(1) << wall << " s, eta " << eta << " s\n"
-                 << std::defaultfloat << std::flush;
-      }
-    }
-  } catch (const sim::InstabilityError& e) {
-    s.status = "unstable";
-    s.message = e.what();
+  if (options.handScript.empty()) {
+    out << "scene " << scene.name << " (" << s.mode << "): " << simulation.particles().size()
+        << " fluid particles, " << simulation.boundary().size() << " boundary particles, " << s.threads
+        << " threads, " << simTime << " s to simulate\n";
+  } else if (!options.quiet) {
+    out << "scene " << scene.name << " (" << s.mode << ") with the hand replaying " << options.handScript
+        << ": " << simulation.particles().size() << " fluid particles, " << simulation.boundary().size()
+        << " boundary particles, " << s.threads << " threads, " << simTime << " s to simulate\n";
   }
-  if (!options.saveState.empty() && s.status == "ok")
-    sim::saveState(options.saveState, simulation);
-  s.wallSeconds = std::chrono::duration<double>(Clock::now() - start).count();
-  s.splashParticles /= double(frame - firstFrame + 1);
-  s.splashHeight /= double(frame - firstFrame + 1);
-  s.splashHeightWithSplash /= double(frame - firstFrame + 1);
-  s.frames = frame;
-  fillRunFigures(simulation, s);
+
+  HeadlessPlatform platform(options, scene.frameRate, simTime, s, progress, onFrame);
+  runAppLoop(session, platform, std::nullopt);
+  s.wallSeconds = platform.wallSeconds();
+  s.frames = platform.frames();
+  const double taken = double(std::max(s.frames, 0) + 1);
+  s.splashParticles /= taken;
+  s.splashHeight /= taken;
+  s.splashHeightWithSplash /= taken;
+  fillRunFigures(session.simulation(), s);
   return s;
 }
 

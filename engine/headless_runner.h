@@ -1,6 +1,7 @@
 #pragma once
-/// The headless mode: runs a scene with no display and no GL, shows progress, prints a closing summary, and
-/// optionally writes statistics as JSON and particles per frame as PLY.
+/// The headless mode: runs a scene with no display and no GL (alone, or with a recorded hand replayed)
+/// through the app loop in fixed frame steps, shows progress, prints a closing summary, and optionally writes
+/// statistics as JSON and particles per frame as PLY.
 
 #include <functional>
 #include <ostream>
@@ -8,6 +9,7 @@
 
 #include "engine/cli.h"
 #include "sim/simulation.h"
+#include "sim/splash.h"
 
 namespace fp::engine {
 
@@ -47,12 +49,15 @@ struct RunSummary {
   double adaptivityShare = 0;       ///< "adaptivity_share": share of step time in levels and adaptation [-]
 };
 
-/// Called with every frame (frame 0 is the initial state), after the PLY export: the headless renderer writes
-/// its images here.
-using FrameCallback = std::function<void(int frame, const sim::Simulation& simulation)>;
+/// Called with every frame (frame 0 is the initial state), after the PLY export, with the frame's splash
+/// particles (generated once a frame for the figures): the headless renderer writes its images here.
+using FrameCallback =
+    std::function<void(int frame, const sim::Simulation& simulation, const sim::SplashParticles& splash)>;
 
-/// Runs the scene of `options` headless. Throws sim::InputError for a bad scene or unwritable output; an
-/// instability ends the run and is reported in the summary (status "unstable").
+/// Runs the scene of `options` headless through the app loop (sim/ steps in fixed frames of the scene up to
+/// --frames, --sim-time or the scene's sim_time; the hand of --hand-script replayed in it when given). Throws
+/// sim::InputError for a bad scene, hand script or unwritable output, std::invalid_argument for a bad
+/// setting; an instability ends the run and is reported in the summary (status "unstable").
 RunSummary runHeadless(const CliOptions& options, std::ostream& out, std::ostream& progress,
                        const FrameCallback& onFrame = {});
 

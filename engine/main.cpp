@@ -1,7 +1,7 @@
 /// fluidplaying: the FluidPlaying executable. Without --headless it opens the desktop window (real-time
-/// water, the mouse hand, the panel); with --headless it runs the headless runner, or the app loop in fixed
-/// steps when a recorded hand is replayed (--hand-script). Without a display the window mode says so in one
-/// line and runs headless instead.
+/// water, the mouse hand, the panel); with --headless it runs the scene through the same app loop in fixed
+/// frame steps (with a recorded hand replayed when --hand-script is given). Without a display the window mode
+/// says so in one line and runs headless instead.
 
 #include <iostream>
 #include <memory>
@@ -31,8 +31,6 @@ int runWindow(const CliOptions& options) {
   }
   const int frames = runAppLoop(session, platform, options.frames);
   platform.finish();
-  if (!options.saveState.empty())
-    session.saveState(options.saveState);
   if (!options.quiet) {
     std::cout << "frames " << frames << ", simulated " << session.simulation().time()
               << " s, real-time factor " << session.meanRealTimeFactor() << "\n";
@@ -43,18 +41,6 @@ int runWindow(const CliOptions& options) {
 }
 
 int runHeadlessMode(const CliOptions& options) {
-  if (!options.handScript.empty()) {
-    const RunSummary summary = runHeadlessApp(options, std::cout);
-    printSummary(std::cout, summary);
-    std::cout << "momentum             " << summary.momentumFinal.transpose() << " kg m/s\n";
-    if (!options.statsPath.empty())
-      writeStatsJson(options.statsPath, summary);
-    if (summary.status != "ok") {
-      std::cerr << "fluidplaying: " << summary.message << "\n";
-      return kExitUnstable;
-    }
-    return kExitOk;
-  }
   // The context and the shaders come first, so a missing shader stops the run before any simulation.
   std::unique_ptr<HeadlessRender> render;
   FrameCallback onFrame;
@@ -64,12 +50,15 @@ int runHeadlessMode(const CliOptions& options) {
       std::cout << "rendering " << options.width << "x" << options.height << " " << options.view
                 << " view into " << options.outDir << " (" << render->contextDescription() << ")\n";
     }
-    onFrame = [&render](int frame, const fp::sim::Simulation& simulation) {
-      render->renderFrame(frame, simulation);
+    onFrame = [&render](int frame, const fp::sim::Simulation& simulation,
+                        const fp::sim::SplashParticles& splash) {
+      render->renderFrame(frame, simulation, &splash);
     };
   }
   const RunSummary summary = runHeadless(options, std::cout, std::cerr, onFrame);
   printSummary(std::cout, summary);
+  if (!options.handScript.empty())
+    std::cout << "momentum             " << summary.momentumFinal.transpose() << " kg m/s\n";
   if (render) {
     std::cout << "images               " << render->imagesWritten() << " (" << render->meanMilliseconds()
               << " ms each)\n";

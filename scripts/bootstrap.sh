@@ -3,11 +3,8 @@
 #   bash scripts/bootstrap.sh demo    install, build, open the desktop app (or, with no display, render the hand
 #                                     tank with a recorded hand into out/demo_frames/ as PNG)
 #   bash scripts/bootstrap.sh test    install, check formatting, build, run all tests, then the sanitizer tests
-#                                     (ASan+UBSan, then ThreadSanitizer), then each fuzzer for FP_FUZZ_SECONDS
-#                                     (default 30) seconds
 #   bash scripts/bootstrap.sh build   install and build only
-# Environment: FP_JOBS (default 2) sets the build and ctest parallelism; FP_FUZZ_SECONDS (default 30) the time
-# of each fuzzer in test mode (0 skips the fuzzing stage).
+# Environment: FP_JOBS (default 2) sets the build and ctest parallelism.
 set -euo pipefail
 
 readonly PACKAGES=(
@@ -55,8 +52,6 @@ cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
 JOBS="${FP_JOBS:-2}"
 [[ "${JOBS}" =~ ^[1-9][0-9]*$ ]] || die "FP_JOBS must be a positive integer, got '${JOBS}'"
-FUZZ_SECONDS="${FP_FUZZ_SECONDS:-30}"
-[[ "${FUZZ_SECONDS}" =~ ^[0-9]+$ ]] || die "FP_FUZZ_SECONDS must be a whole number of seconds, got '${FUZZ_SECONDS}'"
 export DEBIAN_FRONTEND=noninteractive
 
 install_packages() {
@@ -151,53 +146,6 @@ run_sanitizer_tests() {
   return "${status}"
 }
 
-run_tsan_tests() {
-  section "ThreadSanitizer build (build-tsan/)"
-  # Only the suites below: the renderer, window and command-line tests never run under TSan. They run as
-  # executables, not through ctest, which would count the suites not built here as failures.
-  local -a suites=(tests/test_sim_unit tests/test_physics tests/app/test_app_unit)
-  cmake -S . -B build-tsan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DFP_TSAN=ON -DFP_WERROR=ON || return 1
-  cmake --build build-tsan -j"${JOBS}" --target "${suites[@]##*/}" || return 1
-  # TBB is Debian's, not instrumented; tests/tsan.supp lists what TSan must not report, each with its reason.
-  local -a tsan_env=(
-    "TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1:suppressions=${PWD}/tests/tsan.supp"
-  )
-  local status=0
-  section "ThreadSanitizer tests: unit suites (the app session's included) and the small physics tests"
-  env "${tsan_env[@]}" build-tsan/tests/test_sim_unit || status=1
-  env "${tsan_env[@]}" build-tsan/tests/test_physics --gtest_filter='*Small*' || status=1
-  env "${tsan_env[@]}" build-tsan/tests/app/test_app_unit || status=1
-  return "${status}"
-}
-
-readonly FUZZERS=(scene preset pose_track state)
-
-run_fuzzers() {
-  section "Fuzz build (clang, libFuzzer + ASan + UBSan, build-fuzz/)"
-  command -v clang++ >/dev/null 2>&1 || die "clang++ not found (package clang)"
-  cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang \
-    -DCMAKE_CXX_COMPILER=clang++ -DFP_FUZZ=ON -DFP_BUILD_TESTS=OFF || return 1
-  cmake --build build-fuzz -j"${JOBS}" --target "${FUZZERS[@]/#/fuzz_}" || return 1
-  local status=0 name corpus
-  for name in "${FUZZERS[@]}"; do
-    section "Fuzzing ${name} for ${FUZZ_SECONDS} s (seeds: tests/fuzz/${name}/)"
-    # New inputs go to the build folder; the seeds in the repository are only read.
-    corpus="build-fuzz/corpus/${name}"
-    mkdir -p "${corpus}"
-    if [[ "${name}" == state ]]; then
-      # a state seed of this build's format and parameter table (the committed one may be of an older build)
-      FP_FUZZ_WRITE_SEED="${corpus}/seed.bin" "build-fuzz/tests/fuzz/fuzz_state" >/dev/null || status=1
-    fi
-    # -timeout: an input that takes 10 s is a hang; crashes and hangs are written to build-fuzz/
-    ASAN_OPTIONS=detect_leaks=0:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
-      "build-fuzz/tests/fuzz/fuzz_${name}" -max_total_time="${FUZZ_SECONDS}" -timeout=10 -print_final_stats=1 \
-      -artifact_prefix="build-fuzz/${name}-" "${corpus}" "tests/fuzz/${name}" >"build-fuzz/${name}.log" 2>&1 ||
-      status=1
-    grep -E '^(Done|stat::number_of_executed_units)|ERROR|SUMMARY' "build-fuzz/${name}.log" || true
-  done
-  return "${status}"
-}
-
 run_demo() {
   section "Demo"
   mkdir -p out
@@ -234,10 +182,6 @@ case "${MODE}" in
     build
     run_tests || failures+=("tests")
     run_sanitizer_tests || failures+=("sanitizer tests")
-    run_tsan_tests || failures+=("thread sanitizer tests")
-    if [[ "${FUZZ_SECONDS}" -gt 0 ]]; then
-      run_fuzzers || failures+=("fuzzers")
-    fi
     section "Summary"
     if [[ ${#failures[@]} -gt 0 ]]; then
       echo "FAILED: ${failures[*]}"

@@ -3,9 +3,8 @@
 /// an aligned table, the same figures as CSV and, for the high-resolution scene, a comparison with the
 /// reference measured on this machine.
 ///
-///   fp_bench [--scene FILE] [--sim-time S] [--threads LIST] [--csv FILE] [--quick] [--help]
-
-#include <tbb/global_control.h>
+///   fp_bench [--scene FILE] [--sim-time S] [--threads LIST] [--csv FILE] [--quick] [--set KEY=VALUE]...
+///   [--help]
 
 #include <algorithm>
 #include <chrono>
@@ -23,6 +22,7 @@
 #include <vector>
 
 #include "engine/cli.h"
+#include "engine/cli_app.h"
 #include "engine/scene_loader.h"
 #include "sim/simulation.h"
 
@@ -33,7 +33,6 @@ using fp::engine::kExitInput;
 using fp::engine::kExitOk;
 using fp::engine::kExitUnstable;
 using fp::engine::kExitUsage;
-using fp::engine::parsePositive;
 
 const char* const kDefaultScene = FP_SOURCE_DIR "/assets/scenes/dam_break_hires.json";
 const char* const kQuickScene = FP_SOURCE_DIR "/assets/scenes/dam_break.json";
@@ -58,24 +57,13 @@ constexpr double kRefDensityIterations = 4.4;
 constexpr double kRefDivergenceIterations = 1.4;
 constexpr double kRefNeighborMsPerStep = 110.0;
 
-std::string usage() {
-  return "usage: fp_bench [--scene FILE] [--sim-time S] [--threads LIST] [--csv FILE] [--quick] [--help]\n"
-         "  --scene FILE    scene JSON (default assets/scenes/dam_break_hires.json, the reference's)\n"
-         "  --sim-time S    simulated seconds per run (default 2.0, the reference's)\n"
-         "  --threads LIST  comma-separated thread counts, one run each (default 1,2)\n"
-         "  --csv FILE      also write the CSV to FILE\n"
-         "  --quick         smoke test: assets/scenes/dam_break.json for 0.5 s (--scene/--sim-time win)\n"
-         "  --help          this text\n"
-         "exit codes: 0 ok, 2 bad command line, 3 bad scene or output, 4 simulation unstable\n";
-}
-
 struct Options {
-  bool help = false;
   bool quick = false;
   std::optional<std::string> scene;
   std::optional<double> simTime;
   std::vector<int> threads{1, 2};
   std::string csvPath;
+  std::vector<std::string> sets;  ///< --set KEY=VALUE over the scene's parameters
 };
 
 std::vector<int> parseThreadList(const std::string& text) {
@@ -101,35 +89,47 @@ std::vector<int> parseThreadList(const std::string& text) {
   return list;
 }
 
-Options parseOptions(const std::vector<std::string>& args) {
+/// The command line: every option declared once, with its type, range and help.
+struct CommandLine {
   Options o;
-  for (std::size_t k = 0; k < args.size(); ++k) {
-    const std::string& a = args[k];
-    auto value = [&]() -> const std::string& {
-      if (k + 1 >= args.size())
-        throw std::invalid_argument(a + " needs a value");
-      return args[++k];
-    };
-    if (a == "--help" || a == "-h") {
-      o.help = true;
-    } else if (a == "--quick") {
-      o.quick = true;
-    } else if (a == "--scene") {
-      o.scene = value();
-    } else if (a == "--sim-time") {
-      o.simTime = parsePositive(a, value());
-    } else if (a == "--threads") {
-      o.threads = parseThreadList(value());
-    } else if (a == "--csv") {
-      o.csvPath = value();
-      if (o.csvPath.empty())
-        throw std::invalid_argument("--csv needs a file name");
-    } else {
-      throw std::invalid_argument("unknown option '" + a + "'");
-    }
+  fp::engine::CommandLine line{
+      "fp_bench",
+      "fp_bench: the foundation benchmark. Runs the standard dam break once per thread count and prints a "
+      "table, CSV and, for the high-resolution scene, the comparison with SPlisHSPlasH measured on this "
+      "machine."};
+  CommandLine() {
+    CLI::App& app = line.app();
+    app.add_option("--scene", o.scene,
+                   "scene JSON (default assets/scenes/dam_break_hires.json, the reference's)")
+        ->type_name("FILE");
+    line.addPositive(
+        "--sim-time", [this](double s) { o.simTime = s; },
+        "simulated seconds per run (default 2.0, the reference's)");
+    app.add_option_function<std::string>(
+           "--threads", [this](const std::string& text) { o.threads = parseThreadList(text); },
+           "comma-separated thread counts, one run each (default 1,2)")
+        ->check(CLI::Validator(
+            [](std::string& text) -> std::string {
+              try {
+                parseThreadList(text);
+              } catch (const std::invalid_argument& e) {
+                return std::string(e.what()).substr(std::string("--threads ").size());
+              }
+              return "";
+            },
+            ""))
+        ->type_name("LIST");
+    app.add_option("--csv", o.csvPath, "also write the CSV to FILE")
+        ->type_name("FILE")
+        ->check(CLI::Validator(
+            [](std::string& text) { return text.empty() ? std::string("needs a file name") : std::string(); },
+            ""));
+    app.add_flag("--quick", o.quick,
+                 "smoke test: assets/scenes/dam_break.json for 0.5 s (--scene/--sim-time win)");
+    line.addSet(o.sets);
+    app.footer("Exit codes: 0 ok, 2 bad command line, 3 bad scene or output, 4 simulation unstable.");
   }
-  return o;
-}
+};
 
 /// One line: CPU model and logical CPU count, so a pasted table says what it was measured on.
 std::string machineDescription() {
@@ -232,9 +232,10 @@ std::string format(double value, int precision) {
 
 /// Runs the scene for `simTime` seconds on `threads` threads. Only the stepping loop is timed: loading the
 /// scene and sampling the boundaries are set-up, which the reference's per-step figures leave out as well.
-Row runOnce(const std::string& scenePath, double simTime, int threads) {
-  tbb::global_control control(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
-  const fp::sim::SceneDesc scene = fp::engine::loadScene(scenePath);
+Row runOnce(const std::string& scenePath, double simTime, int threads, const std::vector<std::string>& sets) {
+  const fp::engine::ThreadLimit limit(threads);
+  fp::sim::SceneDesc scene = fp::engine::loadScene(scenePath);
+  fp::engine::applySettings(scene.params, sets);
   fp::sim::Simulation simulation(scene);
   std::cerr << "run: " << threads << " thread(s), " << simulation.particles().size() << " fluid particles, "
             << simulation.boundary().size() << " boundary particles, " << simTime << " s to simulate\n";
@@ -388,29 +389,26 @@ bool isHiresScene(const std::string& path) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  Options options;
-  try {
-    options = parseOptions(std::vector<std::string>(argv + 1, argv + argc));
-  } catch (const std::invalid_argument& e) {
-    std::cerr << "fp_bench: " << e.what() << "\n" << usage();
-    return kExitUsage;
-  }
-  if (options.help) {
-    std::cout << usage();
-    return kExitOk;
-  }
+  CommandLine command;
+  if (const std::optional<int> exit = command.line.parse(argc, argv))
+    return *exit;
+  const Options& options = command.o;
   const std::string scenePath = options.scene.value_or(options.quick ? kQuickScene : kDefaultScene);
   const double simTime = options.simTime.value_or(options.quick ? kQuickSimTime : kDefaultSimTime);
 
   std::vector<Row> rows;
   try {
     // Load once up front so a bad scene fails before anything is printed; each run loads its own copy.
-    const fp::sim::SceneDesc scene = fp::engine::loadScene(scenePath);
+    fp::sim::SceneDesc scene = fp::engine::loadScene(scenePath);
+    fp::engine::applySettings(scene.params, options.sets);
     std::cout << "fp_bench: " << scene.name << " (" << scenePath << "), " << simTime
               << " s simulated per run\n"
               << "machine: " << machineDescription() << "\n";
     for (int threads : options.threads)
-      rows.push_back(runOnce(scenePath, simTime, threads));
+      rows.push_back(runOnce(scenePath, simTime, threads, options.sets));
+  } catch (const std::invalid_argument& e) {  // a --set that breaks a relation with the scene's values
+    std::cerr << fp::engine::usageErrorLine("fp_bench", e.what()) << "\n";
+    return kExitUsage;
   } catch (const fp::sim::InputError& e) {
     std::cerr << "fp_bench: " << e.what() << "\n";
     return kExitInput;

@@ -12,9 +12,6 @@
 ///   fp_bench_modes [--scene FILE] [--sim-time S] [--modes a,b,..] [--threads T] [--set KEY=VALUE]...
 ///                  [--csv FILE] [--out DIR [--images] [--image-time S]] [--quick] [--help]
 
-#include <tbb/global_control.h>
-#include <tbb/info.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -29,6 +26,7 @@
 #include <vector>
 
 #include "engine/cli.h"
+#include "engine/cli_app.h"
 #include "engine/headless_render.h"
 #include "engine/scene_loader.h"
 #include "render/image.h"
@@ -140,24 +138,6 @@ void writePlot(const std::string& path, const std::string& title, const std::str
   f << "</svg>\n";
 }
 
-std::string usage() {
-  return "usage: fp_bench_modes [--scene FILE] [--sim-time S] [--modes LIST] [--threads T] [--set "
-         "KEY=VALUE]...\n"
-         "                      [--csv FILE] [--quick] [--help]\n"
-         "  --scene FILE     scene JSON (default assets/scenes/propeller.json)\n"
-         "  --sim-time S     simulated seconds per mode (default 2; --quick: 0.3)\n"
-         "  --modes LIST     comma-separated modes (default uniform-low,uniform-high,surface,fluidplaying)\n"
-         "  --threads T      worker threads (default: all cores)\n"
-         "  --set KEY=VALUE  override a parameter of the scene, e.g. --set particle_radius=0.006\n"
-         "  --csv FILE       also write the table as CSV\n"
-         "  --out DIR        write DIR/modes_<scene>.csv, the per-frame series, SVG plots and (--images) "
-         "images\n"
-         "  --images         render one image per mode at --image-time (default: the end), side by side\n"
-         "  --image-time S   simulated time of the images\n"
-         "  --rest-time S    simulated seconds of the still run giving each mode's resting level (default "
-         "0.5)\n";
-}
-
 /// Runs one mode. The wall time counts the simulation only: frame sampling, splash and rendering are timed
 /// out.
 /// The resting level of a mode: the same scene with every collider held still, run for `restTime`, then the
@@ -260,95 +240,85 @@ int main(int argc, char** argv) {
   double imageTime = -1.0;
   double restTime = kDefaultRestTime;
   int threads = 0;
-  std::vector<std::pair<std::string, double>> overrides;
   std::vector<sim::AdaptivityMode> modes = {sim::AdaptivityMode::UniformLow, sim::AdaptivityMode::UniformHigh,
                                             sim::AdaptivityMode::Surface, sim::AdaptivityMode::FluidPlaying};
-  try {
-    const std::vector<std::string> args(argv + 1, argv + argc);
-    for (std::size_t k = 0; k < args.size(); ++k) {
-      const std::string& a = args[k];
-      auto value = [&]() -> const std::string& {
-        if (k + 1 >= args.size())
-          throw std::invalid_argument(a + " needs a value");
-        return args[++k];
-      };
-      if (a == "--help") {
-        std::cout << usage();
-        return engine::kExitOk;
-      } else if (a == "--scene") {
-        scenePath = value();
-      } else if (a == "--sim-time") {
-        simTime = engine::parsePositive(a, value());
-      } else if (a == "--quick") {
-        simTime = kQuickSimTime;
-      } else if (a == "--threads") {
-        threads = int(engine::parseInteger(a, value(), 1, 1024));
-      } else if (a == "--csv") {
-        csvPath = value();
-      } else if (a == "--out") {
-        outDir = value();
-      } else if (a == "--images") {
-        images = true;
-      } else if (a == "--rest-time") {
-        restTime = engine::parsePositive(a, value());
-      } else if (a == "--image-time") {
-        imageTime = engine::parsePositive(a, value());
-      } else if (a == "--set") {
-        const std::string kv = value();
-        const std::size_t eq = kv.find('=');
-        if (eq == std::string::npos)
-          throw std::invalid_argument("--set expects KEY=VALUE, got '" + kv + "'");
-        overrides.emplace_back(kv.substr(0, eq),
-                               engine::parseNumber("--set " + kv.substr(0, eq), kv.substr(eq + 1)));
-      } else if (a == "--modes") {
-        modes.clear();
-        std::stringstream list(value());
-        std::string name;
-        while (std::getline(list, name, ',')) {
-          const auto m = sim::parseMode(name);
-          if (!m)
-            throw std::invalid_argument("unknown mode '" + name + "' (expected " + sim::modeNames() + ")");
-          modes.push_back(*m);
-        }
-      } else {
-        throw std::invalid_argument("unknown option '" + a + "'");
-      }
-    }
-  } catch (const std::exception& e) {
-    std::cerr << "fp_bench_modes: " << e.what() << "\n" << usage();
-    return engine::kExitUsage;
+  std::vector<std::string> sets;
+  engine::CommandLine line(
+      "fp_bench_modes",
+      "fp_bench_modes: the paper's comparison: one scene in the resolution modes, with wall time, particle "
+      "counts, splash heights and (--out) per-frame series, SVG plots and images.");
+  {
+    CLI::App& app = line.app();
+    app.add_option("--scene", scenePath, "scene JSON (default assets/scenes/propeller.json)")
+        ->type_name("FILE");
+    // --quick first: its callback runs before --sim-time's, which wins
+    app.add_flag_callback(
+        "--quick", [&] { simTime = kQuickSimTime; }, "a short run: 0.3 s per mode");
+    line.addPositive(
+        "--sim-time", [&](double v) { simTime = v; }, "simulated seconds per mode (default 2; --quick: 0.3)");
+    app.add_option_function<std::string>(
+           "--modes",
+           [&](const std::string& list) {
+             modes.clear();
+             std::stringstream in(list);
+             for (std::string name; std::getline(in, name, ',');)
+               modes.push_back(*sim::parseMode(name));
+           },
+           "comma-separated modes (default uniform-low,uniform-high,surface,fluidplaying)")
+        ->check(CLI::Validator(
+            [](std::string& list) -> std::string {
+              std::stringstream in(list);
+              for (std::string name; std::getline(in, name, ',');) {
+                if (!sim::parseMode(name))
+                  return "unknown mode '" + name + "' (expected " + sim::modeNames() + ")";
+              }
+              return "";
+            },
+            ""))
+        ->type_name("LIST");
+    line.addInteger(
+        "--threads", [&](long long n) { threads = int(n); }, 1, 1024, "worker threads (default: all cores)");
+    line.addSet(sets);
+    app.add_option("--csv", csvPath, "also write the table as CSV")->type_name("FILE");
+    app.add_option("--out", outDir,
+                   "write DIR/modes_<scene>.csv, the per-frame series, SVG plots and (--images) images")
+        ->type_name("DIR");
+    app.add_flag("--images", images,
+                 "render one image per mode at --image-time (default: the end), side by side");
+    line.addPositive(
+        "--image-time", [&](double v) { imageTime = v; }, "simulated time of the images");
+    line.addPositive(
+        "--rest-time", [&](double v) { restTime = v; },
+        "simulated seconds of the still run giving each mode's resting level (default 0.5)");
+    app.footer("Exit codes: 0 ok, 2 bad command line, 3 bad scene or output, 4 a mode went unstable.");
   }
+  if (const std::optional<int> exit = line.parse(argc, argv))
+    return *exit;
 
   sim::SceneDesc scene;
   try {
     scene = engine::loadScene(scenePath);
-    for (const auto& [key, v] : overrides) {
-      const sim::ParamInfo* info = sim::ParamTable::sim().find(key);
-      if (!info)
-        throw sim::InputError("--set: unknown parameter '" + key + "'");
-      const std::string error = sim::ParamTable::setScalar(scene.params, *info, v);
-      if (!error.empty())
-        throw sim::InputError("--set: " + error);
-    }
+    engine::applySettings(scene.params, sets);
+  } catch (const std::invalid_argument& e) {  // a --set that breaks a relation with the scene's values
+    std::cerr << engine::usageErrorLine("fp_bench_modes", e.what()) << "\n";
+    return engine::kExitUsage;
   } catch (const sim::InputError& e) {
     std::cerr << "fp_bench_modes: " << e.what() << "\n";
     return engine::kExitInput;
   }
-  if (threads <= 0)
-    threads = int(tbb::info::default_concurrency());
-  tbb::global_control control(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
+  const engine::ThreadLimit limit(threads);
+  threads = limit.count();
 
   if (images && outDir.empty()) {
-    std::cerr << "fp_bench_modes: --images needs --out DIR\n";
+    std::cerr << engine::usageErrorLine("fp_bench_modes", "--images needs --out DIR") << "\n";
     return engine::kExitUsage;
   }
   if (imageTime < 0 || imageTime > simTime)
     imageTime = simTime;
   std::string stem = std::filesystem::path(scenePath).stem().string();
-  for (const auto& [key, v] : overrides) {
-    std::ostringstream tag;
-    tag << "_" << key << v;
-    stem += tag.str();
+  for (const std::string& kv : sets) {
+    const std::size_t eq = kv.find('=');
+    stem += "_" + kv.substr(0, eq) + kv.substr(eq + 1);
   }
   if (!outDir.empty()) {
     std::error_code ec;

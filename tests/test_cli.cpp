@@ -11,7 +11,9 @@
 
 #include "engine/cli.h"
 #include "engine/headless_runner.h"
+#include "engine/scene_loader.h"
 #include "render/camera.h"
+#include "render/render_settings.h"
 #include "sim/scene.h"
 
 using namespace fp::engine;
@@ -180,6 +182,27 @@ TEST(CliTest, ABadCommandLineIsExitTwoAndOneLine) {
   }
 }
 
+TEST(CliTest, TheBenchmarksShareTheCommandLine) {
+  // every executable: --help exits 0, a bad option or setting exits 2 with one line naming the program
+  std::istringstream exes(FP_BENCH_EXES);
+  for (std::string exe; exes >> exe;) {
+    const std::string name = std::filesystem::path(exe).filename().string();
+    const std::string err = ::testing::TempDir() + "/fp_bench_cli_" + name + ".err";
+    EXPECT_EQ(std::system((exe + " --help > /dev/null 2> " + err).c_str()), 0) << name;
+    for (const char* args : {"--no-such-flag", "--set no_such_key=1"}) {
+      const int status = std::system((exe + " " + args + " > /dev/null 2> " + err).c_str());
+      ASSERT_TRUE(WIFEXITED(status));
+      EXPECT_EQ(WEXITSTATUS(status), kExitUsage) << name << " " << args;
+      std::ifstream in(err);
+      std::vector<std::string> lines;
+      for (std::string line; std::getline(in, line);)
+        lines.push_back(line);
+      ASSERT_EQ(lines.size(), 1u) << name << " " << args;
+      EXPECT_EQ(lines[0].rfind(name + ": ", 0), 0u) << lines[0];
+    }
+  }
+}
+
 TEST(CliTest, SetIsCheckedByTheParameterTable) {
   const CliOptions o =
       parseCommandLine({"--set", "dt_max=0.002", "--set", "gravity=0,-5,0", "--set=warm_start=0"});
@@ -206,6 +229,33 @@ TEST(CliTest, SetIsCheckedByTheParameterTable) {
   EXPECT_EQ(
       runExe("--headless --quiet --frames 1 --scene " + scene("tiny_dam_break.json") + " --set dt_min=0.009"),
       kExitUsage);
+}
+
+TEST(CliTest, RenderOptionsGoThroughTheRenderSettingsTable) {
+  // --set sorts its settings by table; the render options are aliases of render settings
+  const CliOptions o = parseCommandLine({"--render", "--out", "i", "--set", "view=particles", "--set",
+                                         "dt_max=0.002", "--set", "filter_iterations=3"});
+  EXPECT_EQ(o.sets, (std::vector<std::string>{"dt_max=0.002"}));
+  EXPECT_EQ(o.renderSets, (std::vector<std::string>{"view=particles", "filter_iterations=3"}));
+  fp::render::RenderSettings settings;
+  applyRenderOptions(o, settings);
+  EXPECT_EQ(settings.view, fp::render::RenderSettings::View::Particles);
+  EXPECT_EQ(settings.filterIterations, 3);
+  fp::render::RenderSettings aliased;
+  applyRenderOptions(parseCommandLine({"--color", "speed", "--no-spray", "--highlight-time", "0"}), aliased);
+  EXPECT_EQ(aliased.view, fp::render::RenderSettings::View::Particles);
+  EXPECT_EQ(aliased.colorField, fp::render::ColorField::Speed);
+  EXPECT_FALSE(aliased.showSpray);
+  EXPECT_FALSE(aliased.highlightSplits);
+  fp::render::RenderSettings longer;
+  applyRenderOptions(parseCommandLine({"--highlight-time", "2"}), longer);
+  EXPECT_TRUE(longer.highlightSplits);
+  EXPECT_FLOAT_EQ(longer.highlightDuration, 2.0f);
+  // the table's messages and ranges
+  EXPECT_NE(messageOf({"--set", "view=wire"}).find("fluid or particles"), std::string::npos);
+  EXPECT_NE(messageOf({"--set", "viewz=fluid"}).find("did you mean view"), std::string::npos);
+  EXPECT_THROW(parseCommandLine({"--highlight-time", "20"}), std::invalid_argument);  // the table's max
+  EXPECT_THROW(parseCommandLine({"--headless", "--set", "view=particles"}), std::invalid_argument);
 }
 
 TEST(CliTest, SetAndSeedReachTheRun) {
@@ -312,6 +362,36 @@ TEST(HeadlessRunnerTest, WritesSummaryStatsAndFramesSmall) {
   printSummary(summary, s);
   EXPECT_NE(summary.str().find("us per particle-step"), std::string::npos);
   EXPECT_THROW(writeStatsJson("/nonexistent/dir/stats.json", s), fp::sim::InputError);
+}
+
+TEST(HeadlessRunnerTest, TheAppLoopStepsLikeAPlainLoop) {
+  // the headless run goes through runAppLoop in fixed frames; the simulation must step exactly as a plain
+  // loop over Simulation::step to the same end, and the figures be those of the same state
+  const ThreadLimit threads(1);
+  CliOptions o;
+  o.headless = true;
+  o.quiet = true;
+  o.scenePath = scene("tiny_dam_break.json");
+  o.mode = "fluidplaying";
+  o.simTime = 0.11;  // not a whole number of frames: the last frame stops at the end
+  std::ostringstream out, progress;
+  int callbacks = 0;
+  const RunSummary s = runHeadless(
+      o, out, progress, [&](int frame, const fp::sim::Simulation&, const fp::sim::SplashParticles&) {
+        EXPECT_EQ(frame, callbacks++);
+      });
+  fp::sim::SceneDesc desc = fp::engine::loadScene(o.scenePath);
+  desc.mode = fp::sim::AdaptivityMode::FluidPlaying;
+  fp::sim::Simulation plain(desc);
+  while (plain.time() < 0.11 - 1e-12)
+    plain.step();
+  EXPECT_EQ(s.steps, plain.stepCount());
+  EXPECT_EQ(s.simSeconds, plain.time());
+  EXPECT_EQ(s.particlesFinal, plain.particles().size());
+  EXPECT_EQ(s.momentumFinal, plain.totalMomentum());
+  EXPECT_EQ(s.massFinal, plain.totalMass());
+  EXPECT_EQ(s.frames, 6);  // 0.11 s at 60 Hz: six whole frames after the initial state
+  EXPECT_EQ(callbacks, 7);
 }
 
 TEST(CameraTest, FramesABoxAndProjectsItsCentreToTheMiddle) {

@@ -13,7 +13,6 @@
 #include <sstream>
 #include <string>
 
-#include "engine/app_session.h"
 #include "engine/cli.h"
 #include "engine/presets.h"
 #include "engine/scene_loader.h"
@@ -200,75 +199,6 @@ TEST(RobustnessTest, FullDiskForFramesStatsAndStates) {
   EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
   sim::Simulation simulation(engine::loadScene(scene));
   expectOneLineError([&] { sim::saveState("/dev/full", simulation); }, "/dev/full");
-}
-
-TEST(RobustnessTest, SavedStateResumesBitIdenticallyAndBadOnesExitWithOneLine) {
-  const fs::path dir = scratch("state");
-  const std::string run = "--headless --quiet --threads 1 --mode fluidplaying --scene " +
-                          engine::assetPath("assets/scenes/tiny_dam_break.json");
-  const std::string whole = (dir / "whole.bin").string(), half = (dir / "half.bin").string(),
-                    resumed = (dir / "resumed.bin").string();
-  std::string err;
-  ASSERT_EQ(runExe(run + " --frames 16 --save-state " + whole, err), engine::kExitOk) << err;
-  ASSERT_EQ(runExe(run + " --frames 8 --save-state " + half, err), engine::kExitOk) << err;
-  ASSERT_EQ(runExe(run + " --frames 16 --load-state " + half + " --save-state " + resumed, err),
-            engine::kExitOk)
-      << err;
-  auto bytes = [](const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  };
-  EXPECT_GT(bytes(whole).size(), 1000u);
-  EXPECT_TRUE(bytes(whole) == bytes(resumed)) << "the resumed run's final state differs";
-  // another seed, a truncated file, a folder: exit 3 with one line
-  for (const std::string& bad : {run + " --frames 16 --seed 9 --load-state " + half,
-                                 run + " --frames 16 --load-state " + dir.string()}) {
-    EXPECT_EQ(runExe(bad, err), engine::kExitInput) << bad;
-    EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
-  }
-  writeFile(half, bytes(whole).substr(0, 100));
-  EXPECT_EQ(runExe(run + " --frames 16 --load-state " + half, err), engine::kExitInput);
-  EXPECT_NE(err.find("truncated"), std::string::npos) << err;
-  EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
-}
-
-TEST(RobustnessTest, SessionStartsFromASavedStateAndResetReturnsToIt) {
-  const fs::path dir = scratch("session_state");
-  const std::string path = (dir / "session.bin").string();
-  engine::SessionConfig config;
-  config.scenePath = engine::assetPath("assets/scenes/tiny_dam_break.json");
-  config.fixedStep = true;
-  config.handScript = engine::assetPath("assets/hands/push.csv");
-  auto frames = [](engine::AppSession& session, int n) {
-    for (int k = 0; k < n; ++k) {
-      session.finishSteps();
-      session.setHandTarget(session.handPose());
-      session.applyRequests();
-      session.startSteps(1.0 / 60.0, 1.0);
-    }
-    session.finishSteps();
-  };
-  engine::AppSession first(config);
-  frames(first, 6);
-  first.saveState(path);
-  const double savedTime = first.simulation().time();
-  const std::size_t savedCount = first.simulation().particles().size();
-
-  config.statePath = path;
-  engine::AppSession resumed(config);
-  EXPECT_EQ(resumed.simulation().time(), savedTime);
-  EXPECT_EQ(resumed.simulation().particles().size(), savedCount);
-  EXPECT_EQ(resumed.handPose().position, first.handPose().position);
-  frames(resumed, 3);
-  EXPECT_GT(resumed.simulation().time(), savedTime);
-  resumed.requests().reset = true;
-  resumed.applyRequests();
-  EXPECT_EQ(resumed.simulation().time(), savedTime) << "Reset returns to the saved state";
-  EXPECT_EQ(resumed.error(), "");
-
-  // a state of another scene: the session does not start
-  config.scenePath = engine::assetPath("assets/scenes/tank_rest.json");
-  EXPECT_THROW(engine::AppSession other(config), sim::StateError);
 }
 
 TEST(RobustnessTest, NoGl33FallsBackToHeadlessInOneLine) {

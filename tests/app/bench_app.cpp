@@ -2,6 +2,7 @@
 // factor, on the default tank-and-hand scene with a replayed interaction. Needs a display (xvfb-run -a works,
 // llvmpipe).
 //   fp_bench_app [--frames N] [--width W] [--height H] [--mode NAME] [--hand-script FILE] [--fixed-step]
+//                [--set KEY=VALUE]... [--help]
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
@@ -10,6 +11,7 @@
 
 #include "engine/app_loop.h"
 #include "engine/cli.h"
+#include "engine/cli_app.h"
 #include "engine/desktop_platform.h"
 #include "engine/headless_app.h"
 
@@ -26,14 +28,15 @@ class Meter : public AppPlatform {
  public:
   explicit Meter(DesktopPlatform& w) : window(w) {}
   bool running() override { return window.running(); }
-  void input(AppSession& session, double wallDt) override {
+  FrameClock beginFrame() override { return window.beginFrame(); }
+  void input(AppSession& session, const FrameClock& clock) override {
     if (frames++ > 0) {
       const SessionStats& s = session.stats();
       const FrameTiming& t = window.timing();
       samples.push_back({s.frameMs, s.simMs, s.waitMs, t.render, t.ui, t.capture, t.input, t.present,
                          double(s.steps), double(s.realTimeFactor.last())});
     }
-    window.input(session, wallDt);
+    window.input(session, clock);
   }
   void capture(AppSession& session, int frame) override { window.capture(session, frame); }
   void draw(AppSession& session, int frame) override { window.draw(session, frame); }
@@ -46,35 +49,50 @@ class Meter : public AppPlatform {
 }  // namespace
 
 int main(int argc, char** argv) {
-  int frames = 180;
-  std::vector<std::string> args;
-  std::string mode = "fluidplaying";
-  std::string script = std::string(FP_SOURCE_DIR) + "/assets/hands/splash.csv";
-  for (int k = 1; k < argc; ++k) {
-    const std::string a = argv[k];
-    if (a == "--frames" && k + 1 < argc) {
-      frames = std::atoi(argv[++k]);
-    } else if (a == "--mode" && k + 1 < argc) {
-      mode = argv[++k];
-    } else if (a == "--hand-script" && k + 1 < argc) {
-      script = argv[++k];
+  CliOptions o;
+  o.scenePath = std::string(FP_SOURCE_DIR) + "/assets/scenes/hand_tank.json";
+  o.mode = "fluidplaying";
+  o.handScript = std::string(FP_SOURCE_DIR) + "/assets/hands/splash.csv";
+  o.frames = 180;
+  CommandLine line(
+      "fp_bench_app",
+      "fp_bench_app: the desktop app's frame time split into simulation, rendering and UI, and "
+      "the real-time factor, on the hand tank with a replayed hand. Needs a display (xvfb-run -a).");
+  line.addInteger(
+      "--frames", [&o](long long n) { o.frames = int(n); }, 1, 1000000, "frames to run (default 180)");
+  for (const char* side : {"--width", "--height"}) {
+    int& target = side[2] == 'w' ? o.width : o.height;
+    line.addInteger(
+        side,
+        [&o, &target](long long n) {
+          target = int(n);
+          o.sizeGiven = true;
+        },
+        16, 8192,
+        std::string("window ") + (side[2] == 'w' ? "width (default 1280)" : "height (default 720)"));
+  }
+  line.app()
+      .add_option("--mode", o.mode, "resolution mode (default fluidplaying)")
+      ->type_name("NAME")
+      ->check(
+          choiceOf(fp::sim::modeNames(), [](const std::string& m) { return bool(fp::sim::parseMode(m)); }));
+  line.app()
+      .add_option("--hand-script", o.handScript, "the replayed hand (default assets/hands/splash.csv)")
+      ->type_name("FILE");
+  line.app().add_flag("--fixed-step", o.fixedStep, "every frame advances 1/frame_rate (default: real time)");
+  line.addSet(o.sets);
+  if (const std::optional<int> exit = line.parse(argc, argv))
+    return *exit;
+  for (auto it = o.sets.begin(); it != o.sets.end();) {  // render settings go to the renderer
+    if (isRenderSetting(*it)) {
+      o.renderSets.push_back(*it);
+      it = o.sets.erase(it);
     } else {
-      args.push_back(a);
+      ++it;
     }
   }
-  std::vector<std::string> cli = {
-      "--scene",       std::string(FP_SOURCE_DIR) + "/assets/scenes/hand_tank.json",
-      "--mode",        mode,
-      "--hand-script", script,
-      "--frames",      std::to_string(frames)};
-  cli.insert(cli.end(), args.begin(), args.end());
-  CliOptions o;
-  try {
-    o = parseCommandLine(cli);
-  } catch (const std::exception& e) {
-    std::cerr << "fp_bench_app: " << e.what() << "\n";
-    return 2;
-  }
+  const std::string mode = o.mode;
+  const std::string script = o.handScript;
   try {
     DesktopPlatform window(o, o.frames);
     AppSession session(sessionConfigOf(o));
@@ -116,9 +134,12 @@ int main(int argc, char** argv) {
     std::printf("csv,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.4f\n", mean.frame / d, mean.steps / d,
                 mean.simTask / d, mean.wait / d, mean.render / d, mean.ui / d, mean.capture / d,
                 mean.input / d, mean.present / d, session.meanRealTimeFactor());
+  } catch (const std::invalid_argument& e) {  // a --set that breaks a relation with the scene's values
+    std::cerr << usageErrorLine("fp_bench_app", e.what()) << "\n";
+    return kExitUsage;
   } catch (const std::exception& e) {
     std::cerr << "fp_bench_app: " << e.what() << "\n";
-    return 3;
+    return kExitInput;
   }
   return 0;
 }

@@ -56,7 +56,8 @@ class EditingPlatform : public AppPlatform {
   int fineBefore = -1;
   double depth = 0.0;
   bool running() override { return true; }
-  void input(AppSession& session, double) override {
+  FrameClock beginFrame() override { return FrameClock{}; }  // fixed steps: the session advances one frame
+  void input(AppSession& session, const FrameClock&) override {
     if (frame == editFrame) {
       fineBefore = fineBelow(session.simulation(), depth);
       const sim::ParamTable& table = sim::ParamTable::sim();
@@ -74,7 +75,50 @@ class EditingPlatform : public AppPlatform {
   int frame = 0;
 };
 
+/// A platform whose clock skips drawing on odd frames, pauses the simulation on frame 4 and asks once for a
+/// restart of its session.
+class ClockPlatform : public AppPlatform {
+ public:
+  bool running() override { return true; }
+  FrameClock beginFrame() override {
+    FrameClock c;
+    c.dt = 1.0 / 60.0;
+    c.render = asked % 2 == 0;
+    c.simulate = asked != 4;
+    c.restart = asked == 2 && restarts == 0;
+    ++asked;
+    return c;
+  }
+  void input(AppSession&, const FrameClock&) override { ++inputs; }
+  void capture(AppSession& session, int frame) override {
+    captured.push_back(frame);
+    times.push_back(session.simulation().time());
+  }
+  void draw(AppSession&, int frame) override { drawn.push_back(frame); }
+  void restart(AppSession&) override { ++restarts; }
+  int asked = 0, inputs = 0, restarts = 0;
+  std::vector<int> captured, drawn;
+  std::vector<double> times;
+};
+
 }  // namespace
+
+TEST(AppLoopTest, ThePlatformsClockDecidesStepsDrawingAndRestarts) {
+  SessionConfig config;
+  config.scenePath = smallTank("uniform-low");
+  config.fixedStep = true;
+  AppSession session(config);
+  ClockPlatform platform;
+  EXPECT_EQ(runAppLoop(session, platform, 7), 7);  // the restart frame does not count
+  EXPECT_EQ(platform.asked, 8);
+  EXPECT_EQ(platform.restarts, 1);
+  EXPECT_EQ(platform.inputs, 7);
+  // clock k gives frame k (k < 2) or k - 1 (after the restart at clock 2); the even clocks render
+  EXPECT_EQ(platform.captured, platform.drawn);
+  EXPECT_EQ(platform.drawn, (std::vector<int>{0, 3, 5}));
+  // the simulation advanced in the frames that simulated (all but clock 4), one frame of the scene each
+  EXPECT_NEAR(session.simulation().time(), 6.0 / 60.0, 0.006);
+}
 
 TEST(AppSessionTest, LiveLevelIntervalChangeMovesFineParticlesDeeper) {
   SessionConfig config;

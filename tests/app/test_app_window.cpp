@@ -27,12 +27,13 @@ class Probe : public AppPlatform {
  public:
   explicit Probe(DesktopPlatform& window) : m_window(window) {}
   bool running() override { return m_window.running(); }
-  void input(AppSession& session, double wallDt) override {
+  FrameClock beginFrame() override { return m_window.beginFrame(); }
+  void input(AppSession& session, const FrameClock& clock) override {
     const sim::Vec3d p = session.simulation().totalMomentum();
     maxAlong = std::max(maxAlong, p.x());
     maxSideways = std::max(maxSideways, std::abs(p.z()));
     handX = session.handPose().position.x();
-    m_window.input(session, wallDt);
+    m_window.input(session, clock);
   }
   void capture(AppSession& session, int frame) override { m_window.capture(session, frame); }
   void draw(AppSession& session, int frame) override {
