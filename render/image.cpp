@@ -32,13 +32,23 @@ namespace {
 struct FileCloser {
   void operator()(std::FILE* f) const { std::fclose(f); }
 };
+
+// libpng's default handlers print to stderr; these keep the message for the one-line error instead (in a
+// thread-local, not a local of writePng: a local changed between setjmp and longjmp would be indeterminate)
+thread_local std::string t_pngMessage;
+void pngError(png_structp png, png_const_charp message) {
+  t_pngMessage = message;
+  png_longjmp(png, 1);
+}
+void pngWarning(png_structp, png_const_charp) {}
 }  // namespace
 
 void writePng(const std::string& path, const Image& image) {
   std::unique_ptr<std::FILE, FileCloser> file(std::fopen(path.c_str(), "wb"));
   if (!file)
     throw RenderError(path + ": cannot write the image");
-  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
+  t_pngMessage.clear();
+  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, pngError, pngWarning);
   png_infop info = png ? png_create_info_struct(png) : nullptr;
   if (!info) {
     png_destroy_write_struct(&png, nullptr);
@@ -46,7 +56,8 @@ void writePng(const std::string& path, const Image& image) {
   }
   if (setjmp(png_jmpbuf(png))) {
     png_destroy_write_struct(&png, &info);
-    throw RenderError(path + ": writing the PNG failed");
+    throw RenderError(path + ": writing the PNG failed" +
+                      (t_pngMessage.empty() ? "" : " (" + t_pngMessage + ")"));
   }
   png_init_io(png, file.get());
   // speed over size: frames of a long run are written on every frame

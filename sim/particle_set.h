@@ -59,6 +59,7 @@ class ParticleSet {
   std::size_t memoryBytes() const;
 
  private:
+  friend class StateAccess;  // sim/state_io: restores the next id
   template <class F>
   void forEachField(F&& f);
   std::uint32_t m_nextId = 0;

@@ -135,6 +135,7 @@ class Simulation {
   }
 
  private:
+  friend class StateAccess;  // sim/state_io: saves and restores the private state
   void createFluid();
   void coarsenInitialLattice(const std::vector<Eigen::Vector4i>& lattice,
                              const std::vector<Eigen::Vector3i>& counts);

@@ -1,0 +1,600 @@
+#include "sim/state_io.h"
+
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <sstream>
+#include <type_traits>
+
+#include "sim/simulation.h"
+
+namespace fp::sim {
+
+namespace {
+
+constexpr char kMagic[8] = {'F', 'P', 'S', 'T', 'A', 'T', 'E', '\0'};
+constexpr std::uint64_t kFnvOffset = 1469598103934665603ull;
+constexpr std::uint64_t kFnvPrime = 1099511628211ull;
+
+std::uint64_t fnv1a(const void* data, std::size_t size, std::uint64_t h = kFnvOffset) {
+  const auto* p = static_cast<const unsigned char*>(data);
+  for (std::size_t i = 0; i < size; ++i) {
+    h ^= p[i];
+    h *= kFnvPrime;
+  }
+  return h;
+}
+
+/// element types stored as raw bytes: plain scalars and Eigen's fixed vectors (contiguous coefficients)
+template <class T>
+constexpr bool kRawBytes =
+    std::is_trivially_copyable_v<T> || std::is_same_v<T, Vec3> || std::is_same_v<T, Vec3d>;
+static_assert(sizeof(Vec3) == 3 * sizeof(Real) && sizeof(Vec3d) == 3 * sizeof(double));
+
+bool littleEndian() {
+  const std::uint32_t one = 1;
+  unsigned char first = 0;
+  std::memcpy(&first, &one, 1);
+  return first == 1;
+}
+
+/// Appends plain values in the host's (little-endian) byte order.
+class Writer {
+ public:
+  template <class T>
+  void put(const T& value) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    const auto* p = reinterpret_cast<const char*>(&value);
+    m_bytes.append(p, sizeof(T));
+  }
+  void putVec(const Vec3d& v) {
+    for (int k = 0; k < 3; ++k)
+      put(v[k]);
+  }
+  template <class T>
+  void putArray(const std::vector<T>& values) {
+    static_assert(kRawBytes<T>);
+    put(std::uint64_t(values.size()));
+    m_bytes.append(reinterpret_cast<const char*>(values.data()), values.size() * sizeof(T));
+  }
+  std::string& bytes() { return m_bytes; }
+
+ private:
+  std::string m_bytes;
+};
+
+/// Reads what Writer wrote; every read checks the bytes left, every count against them.
+class Reader {
+ public:
+  explicit Reader(std::string_view bytes) : m_bytes(bytes) {}
+  template <class T>
+  T get(const char* what) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    need(sizeof(T), what);
+    T value;
+    std::memcpy(&value, m_bytes.data() + m_pos, sizeof(T));
+    m_pos += sizeof(T);
+    return value;
+  }
+  Vec3d getVec(const char* what) {
+    Vec3d v;
+    for (int k = 0; k < 3; ++k)
+      v[k] = get<double>(what);
+    return v;
+  }
+  template <class T>
+  std::vector<T> getArray(const char* what) {
+    const std::uint64_t count = get<std::uint64_t>(what);
+    if (count > (m_bytes.size() - m_pos) / sizeof(T))
+      throw StateError(std::string("truncated or corrupt: ") + what + " claims " + std::to_string(count) +
+                       " entries, more than the file holds");
+    static_assert(kRawBytes<T>);
+    std::vector<T> values{};
+    values.resize(std::size_t(count));
+    std::memcpy(static_cast<void*>(values.data()), m_bytes.data() + m_pos, std::size_t(count) * sizeof(T));
+    m_pos += std::size_t(count) * sizeof(T);
+    return values;
+  }
+  std::size_t pos() const { return m_pos; }
+  std::size_t size() const { return m_bytes.size(); }
+
+ private:
+  void need(std::size_t n, const char* what) const {
+    if (m_bytes.size() - m_pos < n) {
+      throw StateError(std::string("truncated: the file ends at byte ") + std::to_string(m_bytes.size()) +
+                       " in " + what);
+    }
+  }
+  std::string_view m_bytes;
+  std::size_t m_pos = 0;
+};
+
+/// Scene description as a stream of hashed numbers.
+class Hasher {
+ public:
+  template <class T>
+  void add(const T& value) {
+    static_assert(std::is_trivially_copyable_v<T>);
+    m_h = fnv1a(&value, sizeof(T), m_h);
+  }
+  void add(const Vec3d& v) {
+    for (int k = 0; k < 3; ++k)
+      add(v[k]);
+  }
+  void add(const Quatd& q) {
+    add(q.w());
+    add(q.x());
+    add(q.y());
+    add(q.z());
+  }
+  void add(const std::string& s) {
+    add(std::uint64_t(s.size()));
+    m_h = fnv1a(s.data(), s.size(), m_h);
+  }
+  std::uint64_t value() const { return m_h; }
+
+ private:
+  std::uint64_t m_h = kFnvOffset;
+};
+
+/// every parameter of the table as doubles, Vector3 ones as three
+std::vector<double> paramValues(const SimParams& p) {
+  std::vector<double> out;
+  for (const ParamInfo& info : ParamTable::sim().entries()) {
+    if (info.kind == ParamKind::Vector3) {
+      for (double c : ParamTable::getVec3(p, info))
+        out.push_back(c);
+    } else {
+      out.push_back(ParamTable::getScalar(p, info));
+    }
+  }
+  return out;
+}
+
+template <class V>
+bool allFinite(const std::vector<V>& values) {
+  for (const V& v : values) {
+    if constexpr (std::is_floating_point_v<V>) {
+      if (!std::isfinite(v))
+        return false;
+    } else {
+      if (!v.allFinite())
+        return false;
+    }
+  }
+  return true;
+}
+
+bool isNaN(const std::vector<Real>& values) {
+  for (Real v : values) {
+    if (std::isnan(v))
+      return true;
+  }
+  return false;
+}
+
+void putAdaptivity(Writer& w, const AdaptivityStats& a) {
+  w.put(a.splits);
+  w.put(a.children);
+  w.put(a.merges);
+  w.put(a.redistributions);
+  w.put(a.splitsBlocked);
+  w.put(a.splitsCompared);
+  w.put(a.splitErrorChosen);
+  w.put(a.splitErrorUnrotated);
+}
+
+AdaptivityStats getAdaptivity(Reader& r) {
+  AdaptivityStats a;
+  a.splits = r.get<std::uint64_t>("run statistics");
+  a.children = r.get<std::uint64_t>("run statistics");
+  a.merges = r.get<std::uint64_t>("run statistics");
+  a.redistributions = r.get<std::uint64_t>("run statistics");
+  a.splitsBlocked = r.get<std::uint64_t>("run statistics");
+  a.splitsCompared = r.get<std::uint64_t>("run statistics");
+  a.splitErrorChosen = r.get<double>("run statistics");
+  a.splitErrorUnrotated = r.get<double>("run statistics");
+  return a;
+}
+
+}  // namespace
+
+/// The private state of a Simulation that a saved state holds (friend of Simulation and ParticleSet).
+class StateAccess {
+ public:
+  struct Pose {
+    Vec3d position, linearVelocity, angularVelocity;
+    Quatd orientation;
+  };
+  struct State {
+    std::uint32_t mode = 0;
+    double time = 0;
+    Real dt = 0;
+    std::uint64_t stepCount = 0;
+    Vec3d boundaryImpulse = Vec3d::Zero();
+    SimParams params;
+    std::vector<Pose> colliders;
+    std::uint32_t nextId = 0;
+    ParticleSet fluid;
+    std::vector<Vec3> boundaryX, boundaryV;
+    std::vector<Real> boundaryPsi;
+    std::vector<Vec3d> boundaryLocal;
+    std::vector<std::uint16_t> boundaryCollider;
+    RunStats run;
+    StepStats last;
+    std::vector<double> extra;
+  };
+
+  static std::string encode(const Simulation& sim, const std::vector<double>& extra) {
+    Writer w;
+    w.bytes().append(kMagic, sizeof(kMagic));
+    w.put(kStateVersion);
+    w.put(sceneHash(sim.m_scene));
+    w.put(std::uint32_t(sim.m_mode));
+    w.put(sim.m_time);
+    w.put(sim.m_dt);
+    w.put(sim.m_stepCount);
+    w.putVec(sim.m_boundaryImpulse);
+    w.putArray(paramValues(sim.m_params));
+    w.put(std::uint64_t(sim.m_colliders.size()));
+    for (const ColliderState& c : sim.m_colliders) {
+      w.putVec(c.position);
+      for (double q : {c.orientation.w(), c.orientation.x(), c.orientation.y(), c.orientation.z()})
+        w.put(q);
+      w.putVec(c.linearVelocity);
+      w.putVec(c.angularVelocity);
+    }
+    const ParticleSet& f = sim.m_fluid;
+    w.put(f.m_nextId);
+    w.putArray(f.x);
+    w.putArray(f.v);
+    w.putArray(f.a);
+    w.putArray(f.m);
+    w.putArray(f.H);
+    w.putArray(f.rho);
+    w.putArray(f.kappa);
+    w.putArray(f.kappaV);
+    w.putArray(f.splitTime);
+    w.putArray(f.id);
+    w.putArray(f.flags);
+    w.putArray(f.levelPhi);
+    w.putArray(f.levelOmega);
+    w.putArray(f.levelNu);
+    w.putArray(f.mOpt);
+    w.putArray(f.phi);
+    w.putArray(f.omega);
+    w.putArray(f.nu);
+    w.putArray(f.heavySteps);
+    const BoundarySet& b = sim.m_boundary;
+    w.putArray(b.x);
+    w.putArray(b.v);
+    w.putArray(b.psi);
+    w.putArray(b.local);
+    w.putArray(b.collider);
+    const RunStats& run = sim.m_run;
+    w.put(run.steps);
+    w.put(run.particleSteps);
+    w.put(std::uint64_t(run.particlesMax));
+    w.put(run.simTime);
+    w.put(run.densityErrorSum);
+    w.put(run.densityErrorMax);
+    w.put(run.densityIterations);
+    w.put(run.divergenceIterations);
+    w.put(run.neighborsSum);
+    putAdaptivity(w, run.adaptivity);
+    const StepStats& last = sim.m_last;
+    w.put(last.dt);
+    w.put(std::int32_t(last.densityIterations));
+    w.put(std::int32_t(last.divergenceIterations));
+    w.put(last.densityError);
+    w.put(last.solverDensityError);
+    w.put(last.fluidNeighbors);
+    w.put(last.boundaryNeighbors);
+    putAdaptivity(w, last.adaptivity);
+    w.putArray(extra);
+    const std::uint64_t sum = fnv1a(w.bytes().data(), w.bytes().size());
+    w.put(sum);
+    return std::move(w.bytes());
+  }
+
+  static State parse(std::string_view bytes, const Simulation& sim, bool verifyChecksum) {
+    if (!littleEndian())
+      throw StateError("saved states are little-endian; this machine is not");
+    if (bytes.size() < sizeof(kMagic) || std::memcmp(bytes.data(), kMagic, sizeof(kMagic)) != 0)
+      throw StateError("not a FluidPlaying state file (bad magic)");
+    Reader r(bytes.substr(sizeof(kMagic)));
+    const auto version = r.get<std::uint32_t>("the version");
+    if (version != kStateVersion) {
+      throw StateError("state file version " + std::to_string(version) + ", this build reads version " +
+                       std::to_string(kStateVersion));
+    }
+    const auto hash = r.get<std::uint64_t>("the scene hash");
+    if (verifyChecksum) {
+      // checked before anything else is believed: a flipped byte anywhere is reported as corruption
+      if (bytes.size() < sizeof(kMagic) + 20 + sizeof(std::uint64_t))
+        throw StateError("truncated: the file ends at byte " + std::to_string(bytes.size()));
+      const std::size_t body = bytes.size() - sizeof(std::uint64_t);
+      std::uint64_t stored = 0;
+      std::memcpy(&stored, bytes.data() + body, sizeof(stored));
+      if (fnv1a(bytes.data(), body) != stored)
+        throw StateError("corrupt or truncated: checksum mismatch");
+    }
+    if (hash != sceneHash(sim.m_scene)) {
+      throw StateError(
+          "saved from another scene or scene settings (scene hash differs; same scene file, "
+          "--mode, --seed and hand size needed)");
+    }
+    State s;
+    s.mode = r.get<std::uint32_t>("the mode");
+    if (s.mode != std::uint32_t(sim.m_mode))
+      throw StateError("saved in another resolution mode");
+    s.time = r.get<double>("the time");
+    s.dt = r.get<Real>("the step size");
+    s.stepCount = r.get<std::uint64_t>("the step counter");
+    s.boundaryImpulse = r.getVec("the boundary impulse");
+    if (!std::isfinite(s.time) || s.time < 0 || !std::isfinite(s.dt) || !(s.dt > 0) ||
+        !s.boundaryImpulse.allFinite()) {
+      throw StateError("corrupt: bad time, step size or impulse");
+    }
+
+    const std::vector<double> values = r.getArray<double>("the parameters");
+    if (values.size() != paramValues(sim.m_params).size())
+      throw StateError("corrupt: " + std::to_string(values.size()) + " parameter values");
+    // live parameters may have been edited during the run; the others are the scene's (hashed above)
+    s.params = sim.m_params;
+    std::size_t k = 0;
+    for (const ParamInfo& info : ParamTable::sim().entries()) {
+      const std::size_t width = info.kind == ParamKind::Vector3 ? 3 : 1;
+      std::vector<double> current;
+      if (info.kind == ParamKind::Vector3) {
+        for (double c : ParamTable::getVec3(sim.m_params, info))
+          current.push_back(c);
+      } else {
+        current.push_back(ParamTable::getScalar(sim.m_params, info));
+      }
+      const std::vector<double> saved(values.begin() + std::ptrdiff_t(k),
+                                      values.begin() + std::ptrdiff_t(k + width));
+      k += width;
+      if (!info.live) {
+        if (saved != current)
+          throw StateError("parameter " + info.key + " differs from the scene's, and it is not live");
+        continue;
+      }
+      const std::string error = info.kind == ParamKind::Vector3
+                                    ? ParamTable::setVec3(s.params, info, {saved[0], saved[1], saved[2]})
+                                    : ParamTable::setScalar(s.params, info, saved[0]);
+      if (!error.empty())
+        throw StateError("corrupt parameter: " + error);
+    }
+    const std::string invalid = ParamTable::validate(s.params);
+    if (!invalid.empty())
+      throw StateError("corrupt parameters: " + invalid);
+
+    const auto colliders = r.get<std::uint64_t>("the colliders");
+    if (colliders != sim.m_colliders.size())
+      throw StateError("saved with " + std::to_string(colliders) + " colliders, the scene has " +
+                       std::to_string(sim.m_colliders.size()));
+    for (std::size_t c = 0; c < sim.m_colliders.size(); ++c) {
+      Pose p;
+      p.position = r.getVec("a collider pose");
+      const double qw = r.get<double>("a collider pose"), qx = r.get<double>("a collider pose");
+      const double qy = r.get<double>("a collider pose"), qz = r.get<double>("a collider pose");
+      p.orientation = Quatd(qw, qx, qy, qz);
+      p.linearVelocity = r.getVec("a collider pose");
+      p.angularVelocity = r.getVec("a collider pose");
+      if (!p.position.allFinite() || !p.orientation.coeffs().allFinite() || !p.linearVelocity.allFinite() ||
+          !p.angularVelocity.allFinite() || std::abs(p.orientation.norm() - 1.0) > 1e-6) {
+        throw StateError("corrupt: collider " + std::to_string(c) + " has a bad pose");
+      }
+      s.colliders.push_back(p);
+    }
+
+    ParticleSet& f = s.fluid;
+    s.nextId = r.get<std::uint32_t>("the particle ids");
+    f.x = r.getArray<Vec3>("positions");
+    f.v = r.getArray<Vec3>("velocities");
+    f.a = r.getArray<Vec3>("accelerations");
+    f.m = r.getArray<Real>("masses");
+    f.H = r.getArray<Real>("support radii");
+    f.rho = r.getArray<Real>("densities");
+    f.kappa = r.getArray<Real>("density stiffness");
+    f.kappaV = r.getArray<Real>("divergence stiffness");
+    f.splitTime = r.getArray<Real>("split times");
+    f.id = r.getArray<std::uint32_t>("ids");
+    f.flags = r.getArray<std::uint32_t>("flags");
+    f.levelPhi = r.getArray<Real>("visible levels");
+    f.levelOmega = r.getArray<Real>("vorticity levels");
+    f.levelNu = r.getArray<Real>("velocity-difference levels");
+    f.mOpt = r.getArray<Real>("optimal masses");
+    f.phi = r.getArray<Real>("surface distances");
+    f.omega = r.getArray<Real>("vorticities");
+    f.nu = r.getArray<Real>("velocity differences");
+    f.heavySteps = r.getArray<std::uint32_t>("split delays");
+    const std::size_t n = f.x.size();
+    for (std::size_t size :
+         {f.v.size(), f.a.size(), f.m.size(), f.H.size(), f.rho.size(), f.kappa.size(), f.kappaV.size(),
+          f.splitTime.size(), f.id.size(), f.flags.size(), f.levelPhi.size(), f.levelOmega.size(),
+          f.levelNu.size(), f.mOpt.size(), f.phi.size(), f.omega.size(), f.nu.size(), f.heavySteps.size()}) {
+      if (size != n)
+        throw StateError("corrupt: particle fields of different lengths");
+    }
+    if (n == 0)
+      throw StateError("corrupt: no fluid particle");
+    const Vec3 lo = sim.m_scene.domain.min().cast<Real>();
+    const Vec3 hi = sim.m_scene.domain.max().cast<Real>();
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!((f.x[i].array() >= lo.array()).all() && (f.x[i].array() <= hi.array()).all()))
+        throw StateError("corrupt: particle " + std::to_string(i) + " lies outside the domain");
+      if (!(f.m[i] > 0) || !(f.H[i] > 0) || !std::isfinite(f.m[i]) || !std::isfinite(f.H[i]) ||
+          f.id[i] >= s.nextId)
+        throw StateError("corrupt: particle " + std::to_string(i) + " has a bad mass, support or id");
+    }
+    if (!allFinite(f.v) || !allFinite(f.a) || !allFinite(f.rho) || !allFinite(f.kappa) ||
+        !allFinite(f.kappaV) || !allFinite(f.mOpt) || isNaN(f.splitTime) || isNaN(f.levelPhi) ||
+        isNaN(f.levelOmega) || isNaN(f.levelNu) || isNaN(f.phi) || isNaN(f.omega) || isNaN(f.nu)) {
+      throw StateError("corrupt: a particle field is not finite");
+    }
+
+    s.boundaryX = r.getArray<Vec3>("boundary positions");
+    s.boundaryV = r.getArray<Vec3>("boundary velocities");
+    s.boundaryPsi = r.getArray<Real>("boundary volumes");
+    s.boundaryLocal = r.getArray<Vec3d>("boundary local positions");
+    s.boundaryCollider = r.getArray<std::uint16_t>("boundary colliders");
+    const std::size_t nb = sim.m_boundary.size();
+    if (s.boundaryX.size() != nb || s.boundaryV.size() != nb || s.boundaryPsi.size() != nb ||
+        s.boundaryLocal.size() != nb || s.boundaryCollider.size() != nb) {
+      throw StateError("saved with another number of boundary particles than the scene has");
+    }
+    for (std::uint16_t c : s.boundaryCollider) {
+      if (c >= sim.m_colliders.size())
+        throw StateError("corrupt: a boundary particle names collider " + std::to_string(c));
+    }
+    // the static particles never move nor reorder: they must be the scene's own
+    for (std::size_t i = 0; i < sim.m_boundary.staticCount(); ++i) {
+      if (s.boundaryCollider[i] != sim.m_boundary.collider[i] || s.boundaryX[i] != sim.m_boundary.x[i])
+        throw StateError("saved with other static boundaries than the scene has");
+    }
+    if (!allFinite(s.boundaryX) || !allFinite(s.boundaryV) || !allFinite(s.boundaryPsi) ||
+        !allFinite(s.boundaryLocal)) {
+      throw StateError("corrupt: a boundary field is not finite");
+    }
+
+    RunStats& run = s.run;
+    run.steps = r.get<std::uint64_t>("run statistics");
+    run.particleSteps = r.get<std::uint64_t>("run statistics");
+    run.particlesMax = std::size_t(r.get<std::uint64_t>("run statistics"));
+    run.simTime = r.get<double>("run statistics");
+    run.densityErrorSum = r.get<double>("run statistics");
+    run.densityErrorMax = r.get<double>("run statistics");
+    run.densityIterations = r.get<std::uint64_t>("run statistics");
+    run.divergenceIterations = r.get<std::uint64_t>("run statistics");
+    run.neighborsSum = r.get<double>("run statistics");
+    run.adaptivity = getAdaptivity(r);
+    StepStats& last = s.last;
+    last.dt = r.get<double>("last step");
+    last.densityIterations = r.get<std::int32_t>("last step");
+    last.divergenceIterations = r.get<std::int32_t>("last step");
+    last.densityError = r.get<double>("last step");
+    last.solverDensityError = r.get<double>("last step");
+    last.fluidNeighbors = r.get<double>("last step");
+    last.boundaryNeighbors = r.get<double>("last step");
+    last.adaptivity = getAdaptivity(r);
+    s.extra = r.getArray<double>("the app state");
+    r.get<std::uint64_t>("the checksum");
+    if (r.pos() != r.size())
+      throw StateError("corrupt: " + std::to_string(r.size() - r.pos()) + " bytes after the end");
+    return s;
+  }
+
+  static void apply(State&& s, Simulation& sim) {
+    sim.m_time = s.time;
+    sim.m_dt = s.dt;
+    sim.m_stepCount = s.stepCount;
+    sim.m_boundaryImpulse = s.boundaryImpulse;
+    sim.m_params = s.params;
+    for (std::size_t c = 0; c < s.colliders.size(); ++c) {
+      ColliderState& target = sim.m_colliders[c];
+      target.position = s.colliders[c].position;
+      target.orientation = s.colliders[c].orientation;
+      target.linearVelocity = s.colliders[c].linearVelocity;
+      target.angularVelocity = s.colliders[c].angularVelocity;
+    }
+    sim.m_fluid = std::move(s.fluid);
+    sim.m_fluid.m_nextId = s.nextId;
+    BoundarySet& b = sim.m_boundary;
+    b.x = std::move(s.boundaryX);
+    b.v = std::move(s.boundaryV);
+    b.psi = std::move(s.boundaryPsi);
+    b.local = std::move(s.boundaryLocal);
+    b.collider = std::move(s.boundaryCollider);
+    sim.m_run = s.run;
+    sim.m_last = s.last;
+    // Neighbour lists valid for the restored particles, as after a step (readers such as the splash use
+    // them). The sort is stable and the positions are those of the last sort, so the order does not change.
+    sim.searchNeighbors();
+  }
+};
+
+std::uint64_t sceneHash(const SceneDesc& scene) {
+  Hasher h;
+  h.add(scene.domain.min());
+  h.add(scene.domain.max());
+  for (double v : paramValues(scene.params))
+    h.add(v);
+  h.add(std::uint64_t(scene.fluid.size()));
+  for (const FluidBlock& b : scene.fluid) {
+    h.add(b.box.min());
+    h.add(b.box.max());
+    h.add(b.velocity);
+  }
+  h.add(std::uint64_t(scene.colliders.size()));
+  for (const ColliderDesc& c : scene.colliders) {
+    h.add(c.name);
+    h.add(std::uint32_t(c.shape));
+    h.add(c.halfExtents);
+    h.add(c.radius);
+    h.add(c.halfLength);
+    h.add(std::uint8_t(c.container));
+    h.add(c.position);
+    h.add(c.orientation);
+    h.add(c.linearVelocity);
+    h.add(c.angularVelocity);
+    h.add(std::uint8_t(c.driven));
+    if (c.mesh) {
+      h.add(std::uint64_t(c.mesh->vertices.size()));
+      for (const Vec3d& v : c.mesh->vertices)
+        h.add(v);
+      h.add(std::uint64_t(c.mesh->triangles.size()));
+      for (const auto& t : c.mesh->triangles)
+        h.add(t);
+    }
+  }
+  h.add(scene.frameRate);
+  h.add(std::uint32_t(scene.mode));
+  return h.value();
+}
+
+std::string encodeState(const Simulation& sim, const std::vector<double>& extra) {
+  return StateAccess::encode(sim, extra);
+}
+
+std::vector<double> decodeState(std::string_view bytes, Simulation& sim, bool verifyChecksum) {
+  StateAccess::State s = StateAccess::parse(bytes, sim, verifyChecksum);
+  std::vector<double> extra = std::move(s.extra);
+  StateAccess::apply(std::move(s), sim);
+  return extra;
+}
+
+void saveState(const std::string& path, const Simulation& sim, const std::vector<double>& extra) {
+  const std::string bytes = encodeState(sim, extra);
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  if (!out)
+    throw InputError(path + ": cannot write the state file");
+  out.write(bytes.data(), std::streamsize(bytes.size()));
+  out.flush();
+  if (!out)
+    throw InputError(path + ": writing the state file failed (disk full?)");
+}
+
+std::vector<double> loadState(const std::string& path, Simulation& sim) {
+  std::string bytes;
+  try {
+    std::ifstream in(path, std::ios::binary);
+    if (!in)
+      throw StateError(path + ": cannot read the state file");
+    bytes.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    if (in.bad())
+      throw StateError(path + ": reading the state file failed");
+  } catch (const std::ios_base::failure& e) {
+    // libstdc++ throws from the stream buffer for a folder (EISDIR) even without exceptions() set
+    throw StateError(path + ": cannot read the state file (" + e.code().message() + ")");
+  }
+  try {
+    return decodeState(bytes, sim);
+  } catch (const StateError& e) {
+    throw StateError(path + ": " + e.what());
+  }
+}
+
+}  // namespace fp::sim

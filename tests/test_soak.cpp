@@ -1,0 +1,265 @@
+// Soak of the hand tank in fluidplaying mode under the aggressive recorded hand (assets/hands/aggressive.csv,
+// repeated): at every frame end no NaN, no particle out of the tank, the total mass to 1e-6, the particle
+// count between the share floor (two fine layers at the surface) and the uniform-high count, no fluid
+// particle inside a hand collider, the density error bounded; memory flat after the start. Soak.TwelveSeconds
+// runs by default (label physics); Soak.TenMinutes is label soak, outside the default run: ctest --test-dir
+// build -C soak -L soak. Soak.LiveParameterSweep drags every live parameter of the panel from its minimum to
+// its maximum and back while the hand plays.
+
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <unistd.h>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <string>
+
+#include "engine/app_session.h"
+#include "engine/cli.h"
+#include "input/hand_model.h"
+#include "sim/signed_distance.h"
+
+namespace {
+
+using namespace fp;
+
+/// resident set size of the process [bytes]
+double residentBytes() {
+  std::ifstream statm("/proc/self/statm");
+  double pages = 0, resident = 0;
+  statm >> pages >> resident;
+  return resident * double(sysconf(_SC_PAGESIZE));
+}
+
+struct SoakFigures {
+  int frames = 0;
+  double simTime = 0;
+  double wallSeconds = 0;
+  std::size_t countMin = SIZE_MAX, countMax = 0;
+  double floorCount = 0, uniformHighCount = 0, twoLayers = 0;
+  double massErrorMax = 0;       // relative
+  double densityErrorMax = 0;    // mean compression of a step, max over frames
+  double densityErrorSum = 0;    // for the mean over frames
+  double penetrationMax = 0;     // deepest fluid particle inside a hand collider [m]
+  std::size_t insideFrames = 0;  // frames ending with a fluid particle inside a hand collider
+  double speedMax = 0;           // fastest fluid particle at a frame end [m/s]
+  double rssAfterStart = 0, rssEnd = 0, simBytesAfterStart = 0, simBytesEnd = 0;
+  std::uint64_t splits = 0, merges = 0, steps = 0;
+  std::string failure;  // the first broken invariant, empty when all held
+};
+
+std::ostream& operator<<(std::ostream& o, const SoakFigures& f) {
+  o << "frames " << f.frames << ", simulated " << f.simTime << " s in " << f.wallSeconds << " s wall, "
+    << f.steps << " steps\n"
+    << "particles in [" << f.countMin << ", " << f.countMax << "], bounds [" << f.floorCount << ", "
+    << f.uniformHighCount << "] (two fine layers: " << f.twoLayers << "); splits " << f.splits << ", merges "
+    << f.merges << "\n"
+    << "mass error max " << f.massErrorMax << " (relative); density error max " << 100 * f.densityErrorMax
+    << " %, mean " << 100 * f.densityErrorSum / std::max(1, f.frames) << " %; fastest particle " << f.speedMax
+    << " m/s\n"
+    << "deepest fluid particle inside a hand collider " << 1e3 * f.penetrationMax << " mm (" << f.insideFrames
+    << " frames)\n"
+    << "memory after the start: rss " << f.rssAfterStart / 1e6 << " MB, simulation "
+    << f.simBytesAfterStart / 1e6 << " MB; at the end: rss " << f.rssEnd / 1e6 << " MB, simulation "
+    << f.simBytesEnd / 1e6 << " MB\n";
+  return o;
+}
+
+/// Runs the hand tank in fluidplaying mode for `seconds` of simulated time with the aggressive hand
+/// repeated. Memory is sampled at `settle` seconds and at the end.
+SoakFigures soak(double seconds, double settle) {
+  tbb::global_control threads(tbb::global_control::max_allowed_parallelism, 2);
+  engine::SessionConfig config;
+  config.scenePath = engine::assetPath("assets/scenes/hand_tank.json");
+  config.mode = "fluidplaying";
+  config.fixedStep = true;
+  engine::AppSession session(config);
+  const input::PoseTrack track = input::PoseTrack::load(engine::assetPath("assets/hands/aggressive.csv"));
+  session.startReplay(track);
+  double cycleStart = 0.0;
+
+  const sim::Simulation& sim0 = session.simulation();
+  const double mass0 = sim0.totalMass();
+  const double r = sim0.params().particleRadius;
+  SoakFigures f;
+  f.uniformHighCount = session.stats().uniformHighCount;
+  // The share floor (README, "Against the paper's floor"): the surface stays fine, two lattice layers of
+  // spacing 2r over the tank's water surface, whatever the hand does.
+  const sim::ColliderDesc& tank = session.scene().colliders.front();
+  // The estimate is a tenth generous: a sweep drains part of the surface layer for a moment (1,653 against
+  // 1,659 seen).
+  f.twoLayers = 2.0 * 4.0 * tank.halfExtents.x() * tank.halfExtents.z() / (4.0 * r * r);
+  f.floorCount = std::floor(0.9 * f.twoLayers);
+  // the tank's inner walls: a particle beyond them (by more than a radius) escaped
+  const sim::Vec3d lo = tank.position - tank.halfExtents - sim::Vec3d::Constant(r);
+  const sim::Vec3d hi = tank.position + tank.halfExtents + sim::Vec3d::Constant(r);
+  const std::size_t firstHand = session.hand().firstCollider();
+  const double frameRate = session.scene().frameRate;
+  const int frames = int(std::lround(seconds * frameRate));
+  const auto start = std::chrono::steady_clock::now();
+  auto fail = [&f](const std::string& what) {
+    if (f.failure.empty())
+      f.failure = what;
+  };
+  for (int frame = 0; frame < frames && f.failure.empty(); ++frame) {
+    session.finishSteps();
+    const sim::Simulation& sim = session.simulation();
+    if (!session.error().empty()) {
+      fail("frame " + std::to_string(frame) + ": " + session.error());
+      break;
+    }
+    const sim::ParticleSet& p = sim.particles();
+    const std::size_t n = p.size();
+    f.countMin = std::min(f.countMin, n);
+    f.countMax = std::max(f.countMax, n);
+    if (double(n) < f.floorCount || double(n) > f.uniformHighCount + 0.5)
+      fail("frame " + std::to_string(frame) + ": " + std::to_string(n) + " particles");
+    const double massError = std::abs(sim.totalMass() - mass0) / mass0;
+    f.massErrorMax = std::max(f.massErrorMax, massError);
+    if (massError > 1e-6)
+      fail("frame " + std::to_string(frame) + ": mass error " + std::to_string(massError));
+    const double densityError = sim.lastStep().densityError;
+    f.densityErrorMax = std::max(f.densityErrorMax, densityError);
+    f.densityErrorSum += densityError;
+    bool inside = false;
+    for (std::size_t i = 0; i < n; ++i) {
+      const sim::Vec3d x = p.x[i].cast<double>();
+      if (!x.allFinite() || !p.v[i].allFinite()) {
+        fail("frame " + std::to_string(frame) + ": a non-finite particle");
+        break;
+      }
+      f.speedMax = std::max(f.speedMax, double(p.v[i].norm()));
+      if ((x.array() < lo.array()).any() || x.x() > hi.x() || x.z() > hi.z())
+        fail("frame " + std::to_string(frame) + ": particle " + std::to_string(p.id[i]) +
+             " escaped the tank");
+      for (std::size_t c = firstHand; c < firstHand + input::HandModel::kParts; ++c) {
+        const sim::ColliderState& s = sim.colliders()[c];
+        sim::ColliderDesc posed = s.desc;
+        posed.position = s.position;
+        posed.orientation = s.orientation;
+        const double d = sim::signedDistance(posed, x);
+        if (d < 0.0) {
+          inside = true;
+          f.penetrationMax = std::max(f.penetrationMax, -d);
+        }
+      }
+    }
+    f.insideFrames += inside ? 1 : 0;
+    const double t = sim.time();
+    if (frame == int(settle * frameRate)) {
+      f.rssAfterStart = residentBytes();
+      f.simBytesAfterStart = double(sim.memoryBytes());
+    }
+    // the recording again from the start once it has ended (the hand is back at its first pose then)
+    if (t - cycleStart > track.duration()) {
+      session.startReplay(track);
+      cycleStart = t;
+    }
+    session.setHandTarget(session.handPose());
+    session.applyRequests();
+    session.startSteps(1.0 / frameRate, std::numeric_limits<double>::infinity());
+    f.frames = frame + 1;
+  }
+  session.finishSteps();
+  const sim::Simulation& sim = session.simulation();
+  f.simTime = sim.time();
+  f.steps = sim.runStats().steps;
+  f.splits = sim.runStats().adaptivity.splits;
+  f.merges = sim.runStats().adaptivity.merges;
+  f.rssEnd = residentBytes();
+  f.simBytesEnd = double(sim.memoryBytes());
+  f.wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return f;
+}
+
+void expectSound(const SoakFigures& f) {
+  std::cout << f;
+  EXPECT_EQ(f.failure, "");
+  // A particle may end a frame a little inside a finger that moved into it during the frame's last step: the
+  // boundary particles push it out over the next steps. Deeper than a particle radius would be a hole.
+  EXPECT_LT(f.penetrationMax, 0.0079);
+  EXPECT_LT(f.densityErrorMax, 0.05);
+  // flat: the process and the simulation's arrays hold no more at the end than after the start (+10%, the
+  // particle count varies with the hand)
+  EXPECT_LT(f.simBytesEnd, 1.1 * f.simBytesAfterStart);
+  EXPECT_LT(f.rssEnd, 1.1 * f.rssAfterStart);
+}
+
+TEST(Soak, TwelveSeconds) {
+  // 12 s, not 30: about 5,000 steps of ~12 ms CPU each, a minute or two on CI's two cores
+  const SoakFigures f = soak(12.0, 4.0);
+  EXPECT_EQ(f.frames, 720);
+  expectSound(f);
+}
+
+TEST(Soak, TenMinutes) {
+  const SoakFigures f = soak(600.0, 60.0);
+  EXPECT_EQ(f.frames, 36000);
+  expectSound(f);
+}
+
+TEST(Soak, LiveParameterSweep) {
+  // Every live parameter of the panel from its minimum to its maximum and back over 12 frames while the hand
+  // sweeps; the others at their scene values. Frames are paced like the window's (a wall-time budget per
+  // frame), so extreme step sizes slow the simulated time instead of the test. An absurd value may make the
+  // run unstable: that must be reported (never a NaN in a state shown as good) and a reset must recover.
+  tbb::global_control threads(tbb::global_control::max_allowed_parallelism, 2);
+  engine::SessionConfig config;
+  config.scenePath = engine::assetPath("assets/scenes/hand_tank.json");
+  config.mode = "fluidplaying";
+  engine::AppSession session(config);
+  session.startReplay(input::PoseTrack::load(engine::assetPath("assets/hands/aggressive.csv")));
+  const sim::SimParams base = session.simulation().params();
+  int swept = 0, instabilities = 0, relationHeld = 0;
+  constexpr int kFrames = 12;
+  for (const sim::ParamInfo& info : sim::ParamTable::sim().entries()) {
+    if (!info.live)
+      continue;
+    ++swept;
+    for (int k = 0; k <= kFrames; ++k) {
+      session.finishSteps();
+      const sim::Simulation& sim = session.simulation();
+      if (!session.error().empty()) {
+        ++instabilities;
+        session.editParams() = base;
+        session.requests().reset = true;
+      } else {
+        for (std::size_t i = 0; i < sim.particles().size(); ++i) {
+          ASSERT_TRUE(sim.particles().x[i].allFinite() && sim.particles().v[i].allFinite())
+              << info.key << " frame " << k << ": a NaN in a state shown as good";
+        }
+        const double s = 1.0 - std::abs(2.0 * k / kFrames - 1.0);  // 0 -> 1 -> 0
+        const double value = info.min + s * (info.max - info.min);
+        sim::SimParams& edit = session.editParams();
+        if (info.kind == sim::ParamKind::Vector3)
+          sim::ParamTable::setVec3(edit, info, {value, value, value});
+        else
+          sim::ParamTable::setScalar(edit, info,
+                                     info.kind == sim::ParamKind::Number ? value : std::round(value));
+      }
+      session.setHandTarget(session.handPose());
+      session.applyRequests();
+      // the running parameters keep every relation, whatever the edit
+      ASSERT_EQ(sim::ParamTable::validate(session.simulation().params()), "") << info.key << " frame " << k;
+      ++relationHeld;
+      session.startSteps(1.0 / 60.0, 0.02);
+    }
+    session.finishSteps();
+    session.editParams() = base;
+    if (!session.error().empty()) {
+      ++instabilities;
+      session.requests().reset = true;
+    }
+    session.applyRequests();
+  }
+  std::cout << swept << " live parameters swept, " << relationHeld << " frames with the relations held, "
+            << instabilities << " instabilities reported and reset\n";
+  EXPECT_GT(swept, 20);
+}
+
+}  // namespace

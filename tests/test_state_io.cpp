@@ -1,0 +1,195 @@
+// Saved state: save, reload, run on and compare bit for bit with the uninterrupted run (one thread); every
+// truncation, a flipped byte anywhere, a bad magic, version or scene hash: a StateError, the simulation
+// unchanged.
+
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "sim/simulation.h"
+#include "sim/state_io.h"
+#include "tests/scene_fixtures.h"
+
+namespace {
+
+using namespace fp;
+
+/// a small fluidplaying tank with a paddle moving through it, so adaptivity and kinematic boundaries change
+sim::SceneDesc movingScene(sim::AdaptivityMode mode) {
+  sim::SceneDesc s = test::tankScene(sim::Vec3d(0.2, 0.12, 0.08), sim::Vec3d(-0.2, 0.0, -0.08),
+                                     sim::Vec3d(0.2, 0.12, 0.08), 0.01);
+  s.mode = mode;
+  s.params.massRatio = 8.0;
+  sim::ColliderDesc paddle;
+  paddle.name = "paddle";
+  paddle.shape = sim::ShapeType::Sphere;
+  paddle.radius = 0.03;
+  paddle.position = sim::Vec3d(-0.1, 0.09, 0.0);
+  paddle.linearVelocity = sim::Vec3d(0.8, 0.0, 0.0);
+  s.colliders.push_back(paddle);
+  return s;
+}
+
+template <class T>
+bool sameBits(const std::vector<T>& a, const std::vector<T>& b) {
+  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
+}
+
+void expectIdentical(const sim::Simulation& a, const sim::Simulation& b) {
+  ASSERT_EQ(a.stepCount(), b.stepCount());
+  EXPECT_EQ(a.time(), b.time());
+  const sim::ParticleSet& p = a.particles();
+  const sim::ParticleSet& q = b.particles();
+  ASSERT_EQ(p.size(), q.size());
+  EXPECT_TRUE(sameBits(p.x, q.x));
+  EXPECT_TRUE(sameBits(p.v, q.v));
+  EXPECT_TRUE(sameBits(p.m, q.m));
+  EXPECT_TRUE(sameBits(p.H, q.H));
+  EXPECT_TRUE(sameBits(p.rho, q.rho));
+  EXPECT_TRUE(sameBits(p.kappa, q.kappa));
+  EXPECT_TRUE(sameBits(p.kappaV, q.kappaV));
+  EXPECT_TRUE(sameBits(p.id, q.id));
+  EXPECT_TRUE(sameBits(p.mOpt, q.mOpt));
+  EXPECT_TRUE(sameBits(p.heavySteps, q.heavySteps));
+  EXPECT_EQ(p.nextId(), q.nextId());
+  EXPECT_TRUE(sameBits(a.boundary().x, b.boundary().x));
+  EXPECT_EQ(a.runStats().adaptivity.splits, b.runStats().adaptivity.splits);
+  EXPECT_EQ(a.runStats().adaptivity.merges, b.runStats().adaptivity.merges);
+  EXPECT_EQ(a.boundaryImpulse(), b.boundaryImpulse());
+}
+
+class StateIo : public ::testing::TestWithParam<sim::AdaptivityMode> {};
+
+TEST_P(StateIo, ResumedRunIsBitIdenticalOnOneThread) {
+  tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+  const sim::SceneDesc scene = movingScene(GetParam());
+  sim::Simulation uninterrupted(scene);
+  for (int k = 0; k < 30; ++k)
+    uninterrupted.step();
+  uninterrupted.params().viscosity = 0.05;  // a live edit before the save is part of the state
+  const std::string path =
+      (std::filesystem::temp_directory_path() / ("fp_state_" + std::to_string(int(GetParam())) + ".bin"))
+          .string();
+  sim::saveState(path, uninterrupted, {1.5, -2.0});
+  for (int k = 0; k < 40; ++k)
+    uninterrupted.step();
+
+  sim::Simulation resumed(scene);
+  EXPECT_EQ(sim::loadState(path, resumed), (std::vector<double>{1.5, -2.0}));
+  EXPECT_EQ(resumed.stepCount(), 30u);
+  EXPECT_EQ(resumed.params().viscosity, 0.05);
+  for (int k = 0; k < 40; ++k)
+    resumed.step();
+  expectIdentical(uninterrupted, resumed);
+  if (GetParam() == sim::AdaptivityMode::FluidPlaying) {
+    EXPECT_GT(uninterrupted.runStats().adaptivity.splits + uninterrupted.runStats().adaptivity.merges, 0u)
+        << "the comparison should cover steps that change the resolution";
+  }
+  std::filesystem::remove(path);
+}
+
+INSTANTIATE_TEST_SUITE_P(Modes, StateIo,
+                         ::testing::Values(sim::AdaptivityMode::UniformHigh,
+                                           sim::AdaptivityMode::FluidPlaying));
+
+/// a saved state of a few steps, and the simulation to load it into
+struct Saved {
+  sim::SceneDesc scene = movingScene(sim::AdaptivityMode::FluidPlaying);
+  sim::Simulation source{scene};
+  std::string bytes;
+  Saved() {
+    for (int k = 0; k < 5; ++k)
+      source.step();
+    bytes = sim::encodeState(source, {0.25});
+  }
+};
+
+Saved& saved() {
+  static Saved s;
+  return s;
+}
+
+/// decoding `bytes` throws a one-line StateError and leaves the target as it was
+void expectRefused(const std::string& bytes, sim::Simulation& target, const char* expected = nullptr) {
+  const std::uint64_t steps = target.stepCount();
+  const std::size_t n = target.particles().size();
+  try {
+    sim::decodeState(bytes, target);
+    ADD_FAILURE() << "accepted " << bytes.size() << " bytes";
+  } catch (const sim::StateError& e) {
+    const std::string what = e.what();
+    EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+    if (expected) {
+      EXPECT_NE(what.find(expected), std::string::npos) << what;
+    }
+  }
+  EXPECT_EQ(target.stepCount(), steps);
+  EXPECT_EQ(target.particles().size(), n);
+}
+
+TEST(StateIoErrors, EveryTruncationIsRefused) {
+  Saved& s = saved();
+  sim::Simulation target(s.scene);
+  const std::string& bytes = s.bytes;
+  // every offset in the header and around each array boundary, and a stride through the particle data
+  // every offset in the header and the tail, a stride through the particle data; without the checksum too,
+  // so that the reader's own bounds checks are exercised at every field
+  for (std::size_t len = 0; len < bytes.size(); len += (len < 512 || bytes.size() - len < 512) ? 1 : 997) {
+    expectRefused(bytes.substr(0, len), target);
+    try {
+      sim::decodeState(bytes.substr(0, len), target, false);
+      ADD_FAILURE() << "accepted a truncation at " << len;
+    } catch (const sim::StateError&) {
+    }
+  }
+}
+
+TEST(StateIoErrors, CorruptMagicVersionHashAndBytes) {
+  Saved& s = saved();
+  sim::Simulation target(s.scene);
+  std::string bad = s.bytes;
+  bad[0] = 'X';
+  expectRefused(bad, target, "bad magic");
+  bad = s.bytes;
+  bad[8] = char(sim::kStateVersion + 1);
+  expectRefused(bad, target, "version");
+  bad = s.bytes;
+  bad[12] ^= 1;  // the scene hash
+  expectRefused(bad, target);
+  bad = s.bytes;
+  bad[bad.size() / 2] ^= 0x10;
+  expectRefused(bad, target, "checksum");
+  expectRefused(s.bytes + "x", target);
+  expectRefused(std::string(), target, "bad magic");
+}
+
+TEST(StateIoErrors, AnotherSceneIsRefused) {
+  Saved& s = saved();
+  sim::SceneDesc other = s.scene;
+  other.params.seed = 7;
+  sim::Simulation target(other);
+  expectRefused(s.bytes, target, "scene hash");
+  sim::Simulation uniform(movingScene(sim::AdaptivityMode::UniformHigh));
+  expectRefused(s.bytes, uniform, "scene hash");
+}
+
+TEST(StateIoErrors, MissingAndUnwritableFiles) {
+  Saved& s = saved();
+  sim::Simulation target(s.scene);
+  EXPECT_THROW(sim::loadState("/nonexistent/fp_state.bin", target), sim::StateError);
+  EXPECT_THROW(sim::saveState("/nonexistent/fp_state.bin", s.source), sim::InputError);
+  const std::string empty = (std::filesystem::temp_directory_path() / "fp_state_empty.bin").string();
+  { std::ofstream(empty, std::ios::binary); }
+  EXPECT_THROW(sim::loadState(empty, target), sim::StateError);
+  std::filesystem::remove(empty);
+  if (std::filesystem::exists("/dev/full")) {
+    EXPECT_THROW(sim::saveState("/dev/full", s.source), sim::InputError);
+  }
+}
+
+}  // namespace
