@@ -51,26 +51,38 @@ double DfsphSolver::computeDensityAndFactor(SolverContext& ctx) {
   ParticleSet& p = ctx.fluid;
   const std::size_t n = p.size();
   m_factor.resize(n);
+  m_rate.resize(n);
+  resizeCache(m_gradF, ctx.fluidNbrs.indices.size());
+  resizeCache(m_gradB, ctx.boundaryNbrs.indices.size());
   const Real rho0 = Real(ctx.params.restDensity);
   const Real invRho0 = Real(1) / rho0;
   const Real Hb = ctx.boundary.support();
   const Vec3* x = p.x.data();
+  const Vec3* v = p.v.data();
   const Real* m = p.m.data();
   const Real* H = p.H.data();
   const Vec3* xb = ctx.boundary.x.data();
+  const Vec3* vb = ctx.boundary.v.data();
   const Real* psi = ctx.boundary.psi.data();
   const std::uint32_t* fo = ctx.fluidNbrs.offsets.data();
   const std::uint32_t* fi = ctx.fluidNbrs.indices.data();
   const std::uint32_t* bo = ctx.boundaryNbrs.offsets.data();
   const std::uint32_t* bi = ctx.boundaryNbrs.indices.data();
+  Real* gF = m_gradF.data();
+  Real* gB = m_gradB.data();
+  // One pass evaluates every pair's kernel for the whole step: density, factor, the density rate the
+  // divergence solve starts from, and V_j grad W_ij / (x_i - x_j) cached for the solves' ~12 further passes
+  // (positions do not change until the step's end).
   return deterministicSum(n, 0.0,
                           [&](std::size_t i) {
                             const Vec3 xi = x[i];
+                            const Vec3 vi = v[i];
                             const Real Hi = H[i];
                             const Real Vi = m[i] * invRho0;
                             Real density = Vi * CubicSpline::w0(Hi);
                             Vec3 gradSum = Vec3::Zero();
                             Real sqSum = 0;
+                            Real rate = 0;
                             for (std::uint32_t k = fo[i]; k < fo[i + 1]; ++k) {
                               const std::uint32_t j = fi[k];
                               const Vec3 xij = xi - x[j];
@@ -78,8 +90,11 @@ double DfsphSolver::computeDensityAndFactor(SolverContext& ctx) {
                               CubicSpline::evaluate(xij.norm(), pairSupport(Hi, H[j]), w, g);
                               const Real Vj = m[j] * invRho0;
                               density += Vj * w;
-                              const Vec3 gv = (Vj * g) * xij;
+                              const Real vg = Vj * g;
+                              gF[k] = vg;
+                              const Vec3 gv = vg * xij;
                               gradSum += gv;
+                              rate += gv.dot(vi - v[j]);
                               // k_i moves neighbour j by V_i grad W (the pair update is symmetric), so the
                               // second term of alpha is V_i V_j |grad W|^2, not V_j^2 |grad W|^2: the two
                               // differ as soon as masses do, and the latter over-drives heavy particles among
@@ -95,9 +110,14 @@ double DfsphSolver::computeDensityAndFactor(SolverContext& ctx) {
                               Real w, g;
                               CubicSpline::evaluate(xib.norm(), hb, w, g);
                               density += sb * psi[b] * w;
-                              gradSum += (sb * psi[b] * g) * xib;
+                              const Real vg = sb * psi[b] * g;
+                              gB[k] = vg;
+                              const Vec3 gv = vg * xib;
+                              gradSum += gv;
+                              rate += gv.dot(vi - vb[b]);
                             }
                             p.rho[i] = density * rho0;
+                            m_rate[i] = rate;
                             const Real denom = gradSum.squaredNorm() + sqSum;
                             m_factor[i] = denom > kEps ? Real(1) / denom : Real(0);
                             return double(std::max(density - Real(1), Real(0)));
@@ -105,67 +125,53 @@ double DfsphSolver::computeDensityAndFactor(SolverContext& ctx) {
          double(std::max<std::size_t>(n, 1));
 }
 
-void DfsphSolver::computeDensityRate(const SolverContext& ctx) {
+template <class F>
+double DfsphSolver::densityRatePass(const SolverContext& ctx, F&& stiffness) {
   const ParticleSet& p = ctx.fluid;
   const std::size_t n = p.size();
-  m_rate.resize(n);
-  const Real invRho0 = Real(1) / Real(ctx.params.restDensity);
-  const Real Hb = ctx.boundary.support();
   const Vec3* x = p.x.data();
   const Vec3* v = p.v.data();
-  const Real* m = p.m.data();
-  const Real* H = p.H.data();
   const Vec3* xb = ctx.boundary.x.data();
   const Vec3* vb = ctx.boundary.v.data();
-  const Real* psi = ctx.boundary.psi.data();
   const std::uint32_t* fo = ctx.fluidNbrs.offsets.data();
   const std::uint32_t* fi = ctx.fluidNbrs.indices.data();
   const std::uint32_t* bo = ctx.boundaryNbrs.offsets.data();
   const std::uint32_t* bi = ctx.boundaryNbrs.indices.data();
-  tbb::parallel_for(Range(0, n, kGrain), [&](const Range& r) {
-    for (std::size_t i = r.begin(); i < r.end(); ++i) {
-      const Vec3 xi = x[i];
-      const Vec3 vi = v[i];
-      const Real Hi = H[i];
-      Real rate = 0;
-      for (std::uint32_t k = fo[i]; k < fo[i + 1]; ++k) {
-        const std::uint32_t j = fi[k];
-        const Vec3 xij = xi - x[j];
-        const Real g = CubicSpline::gradFactor(xij.norm(), pairSupport(Hi, H[j]));
-        rate += m[j] * invRho0 * g * (vi - v[j]).dot(xij);
-      }
-      const Real hb = pairSupport(Hi, Hb);
-      const Real sb = ctx.boundary.volumeScale(Hi);
-      for (std::uint32_t k = bo[i]; k < bo[i + 1]; ++k) {
-        const std::uint32_t b = bi[k];
-        const Vec3 xib = xi - xb[b];
-        const Real g = CubicSpline::gradFactor(xib.norm(), hb);
-        rate += sb * psi[b] * g * (vi - vb[b]).dot(xib);
-      }
-      m_rate[i] = rate;
+  const Real* gF = m_gradF.data();
+  const Real* gB = m_gradB.data();
+  return deterministicSum(n, 0.0, [&](std::size_t i) {
+    const Vec3 xi = x[i];
+    const Vec3 vi = v[i];
+    Real rate = 0;
+    for (std::uint32_t k = fo[i]; k < fo[i + 1]; ++k) {
+      const std::uint32_t j = fi[k];
+      rate += gF[k] * (vi - v[j]).dot(xi - x[j]);
     }
+    for (std::uint32_t k = bo[i]; k < bo[i + 1]; ++k) {
+      const std::uint32_t b = bi[k];
+      rate += gB[k] * (vi - vb[b]).dot(xi - xb[b]);
+    }
+    m_rate[i] = rate;
+    return double(stiffness(i, rate));
   });
 }
 
 Vec3d DfsphSolver::applyStiffness(SolverContext& ctx, Real dt, std::vector<Real>& accumulated) {
   ParticleSet& p = ctx.fluid;
   const std::size_t n = p.size();
-  const Real invRho0 = Real(1) / Real(ctx.params.restDensity);
-  const Real Hb = ctx.boundary.support();
   const Vec3* x = p.x.data();
   Vec3* v = p.v.data();
   const Real* m = p.m.data();
-  const Real* H = p.H.data();
   const Real* k = m_k.data();
   const Vec3* xb = ctx.boundary.x.data();
-  const Real* psi = ctx.boundary.psi.data();
   const std::uint32_t* fo = ctx.fluidNbrs.offsets.data();
   const std::uint32_t* fi = ctx.fluidNbrs.indices.data();
   const std::uint32_t* bo = ctx.boundaryNbrs.offsets.data();
   const std::uint32_t* bi = ctx.boundaryNbrs.indices.data();
+  const Real* gF = m_gradF.data();
+  const Real* gB = m_gradB.data();
   return deterministicSum(n, Vec3d(Vec3d::Zero()), [&](std::size_t i) -> Vec3d {
     const Vec3 xi = x[i];
-    const Real Hi = H[i];
     const Real ki = k[i];
     accumulated[i] += ki;
     Vec3 dv = Vec3::Zero();
@@ -174,21 +180,13 @@ Vec3d DfsphSolver::applyStiffness(SolverContext& ctx, Real dt, std::vector<Real>
       const Real kSum = ki + k[j];
       if (kSum == Real(0))
         continue;
-      const Vec3 xij = xi - x[j];
-      const Real g = CubicSpline::gradFactor(xij.norm(), pairSupport(Hi, H[j]));
-      dv -= (m[j] * invRho0 * kSum * g) * xij;
+      dv -= (kSum * gF[q]) * (xi - x[j]);
     }
     Vec3 dvb = Vec3::Zero();
     if (ki != Real(0)) {
       // Akinci 2012: the boundary mirrors the particle's own pressure
-      const Real hb = pairSupport(Hi, Hb);
-      const Real sb = ctx.boundary.volumeScale(Hi);
-      for (std::uint32_t q = bo[i]; q < bo[i + 1]; ++q) {
-        const std::uint32_t b = bi[q];
-        const Vec3 xib = xi - xb[b];
-        const Real g = CubicSpline::gradFactor(xib.norm(), hb);
-        dvb -= (sb * psi[b] * ki * g) * xib;
-      }
+      for (std::uint32_t q = bo[i]; q < bo[i + 1]; ++q)
+        dvb -= (ki * gB[q]) * (xi - xb[bi[q]]);
     }
     v[i] += dt * (dv + dvb);
     return double(m[i]) * double(dt) * dvb.cast<double>();
@@ -203,31 +201,43 @@ SolveResult DfsphSolver::divergenceSolve(SolverContext& ctx, Real dt) {
   m_k.resize(n);
   const std::uint32_t* fo = ctx.fluidNbrs.offsets.data();
   const std::uint32_t* bo = ctx.boundaryNbrs.offsets.data();
+  const Real* factor = m_factor.data();
+  Real* kv = p.kappaV.data();
   // only expansion-free motion is enforced: compression (positive rate) is corrected, and only in full
   // neighbourhoods, as in Bender & Koschier's reference implementation
-  auto clampRate = [&](std::size_t i) {
+  auto clampRate = [&](std::size_t i, Real rate) {
     const std::uint32_t count = (fo[i + 1] - fo[i]) + (bo[i + 1] - bo[i]);
-    return count < kMinNeighborsForDivergence ? Real(0) : std::max(m_rate[i], Real(0));
+    return count < kMinNeighborsForDivergence ? Real(0) : std::max(rate, Real(0));
   };
   const double tolerance = ctx.params.divergenceTolerance * 0.01;
+  const Real invDt = Real(1) / dt;
+  // the density pass left the rate of the current velocities in m_rate
   if (ctx.params.warmStart) {
-    computeDensityRate(ctx);
-    for (std::size_t i = 0; i < n; ++i) {
-      m_k[i] = clampRate(i) > 0 ? Real(0.5) * p.kappaV[i] / dt : Real(0);
-      p.kappaV[i] = 0;
-    }
+    tbb::parallel_for(Range(0, n, kGrain), [&](const Range& r) {
+      for (std::size_t i = r.begin(); i < r.end(); ++i) {
+        m_k[i] = clampRate(i, m_rate[i]) > 0 ? Real(0.5) * kv[i] * invDt : Real(0);
+        kv[i] = 0;
+      }
+    });
     m_boundaryImpulse += applyStiffness(ctx, dt, p.kappaV);
   } else {
     std::fill(p.kappaV.begin(), p.kappaV.end(), Real(0));
   }
   SolveResult result;
+  auto stiffness = [&](std::size_t i, Real rate) {
+    const Real clamped = clampRate(i, rate);
+    m_k[i] = clamped * factor[i] * invDt;
+    return clamped;
+  };
+  // without a warm start the rates are still those of the density pass
+  bool fresh = !ctx.params.warmStart;
   for (;;) {
-    computeDensityRate(ctx);
-    double sum = 0.0;
-    for (std::size_t i = 0; i < n; ++i) {
-      const Real rate = clampRate(i);
-      sum += rate;
-      m_k[i] = rate * m_factor[i] / dt;
+    double sum;
+    if (fresh) {
+      sum = deterministicSum(n, 0.0, [&](std::size_t i) { return double(stiffness(i, m_rate[i])); });
+      fresh = false;
+    } else {
+      sum = densityRatePass(ctx, stiffness);
     }
     result.error = sum / double(n) * double(dt);
     // at least one iteration, as in the reference implementation (min_iterations applies to the density
@@ -239,8 +249,10 @@ SolveResult DfsphSolver::divergenceSolve(SolverContext& ctx, Real dt) {
     ++result.iterations;
   }
   // stored per unit time step so that the warm start survives a change of dt
-  for (std::size_t i = 0; i < n; ++i)
-    p.kappaV[i] *= dt;
+  tbb::parallel_for(Range(0, n, kGrain), [&](const Range& r) {
+    for (std::size_t i = r.begin(); i < r.end(); ++i)
+      kv[i] *= dt;
+  });
   return result;
 }
 
@@ -252,27 +264,28 @@ SolveResult DfsphSolver::densitySolve(SolverContext& ctx, Real dt) {
   m_k.resize(n);
   const Real invRho0 = Real(1) / Real(ctx.params.restDensity);
   const Real invDt2 = Real(1) / (dt * dt);
-  auto predicted = [&](std::size_t i) { return std::max(p.rho[i] * invRho0 + dt * m_rate[i], Real(1)); };
+  const Real* rho = p.rho.data();
+  const Real* factor = m_factor.data();
+  Real* kappa = p.kappa.data();
+  auto predicted = [&](std::size_t i, Real rate) { return std::max(rho[i] * invRho0 + dt * rate, Real(1)); };
   const double tolerance = ctx.params.densityTolerance * 0.01;
   if (ctx.params.warmStart) {
-    computeDensityRate(ctx);
-    for (std::size_t i = 0; i < n; ++i) {
-      m_k[i] = predicted(i) > Real(1) ? Real(0.5) * p.kappa[i] : Real(0);
-      p.kappa[i] = 0;
-    }
+    densityRatePass(ctx, [&](std::size_t i, Real rate) {
+      m_k[i] = predicted(i, rate) > Real(1) ? Real(0.5) * kappa[i] : Real(0);
+      kappa[i] = 0;
+      return Real(0);
+    });
     m_boundaryImpulse += applyStiffness(ctx, dt, p.kappa);
   } else {
     std::fill(p.kappa.begin(), p.kappa.end(), Real(0));
   }
   SolveResult result;
   for (;;) {
-    computeDensityRate(ctx);
-    double sum = 0.0;
-    for (std::size_t i = 0; i < n; ++i) {
-      const Real error = predicted(i) - Real(1);
-      sum += error;
-      m_k[i] = error * m_factor[i] * invDt2;
-    }
+    const double sum = densityRatePass(ctx, [&](std::size_t i, Real rate) {
+      const Real error = predicted(i, rate) - Real(1);
+      m_k[i] = error * factor[i] * invDt2;
+      return error;
+    });
     result.error = sum / double(n);
     if ((result.iterations >= ctx.params.minIterations && result.error <= tolerance) ||
         result.iterations >= ctx.params.maxIterations) {
@@ -380,12 +393,43 @@ Real DfsphSolver::cflTimeStep(const SolverContext& ctx, Real dtPrevious) const {
         return acc;
       },
       [](Real a, Real b) { return std::min(a, b); });
-  const double dt = double(ctx.params.cflFactor) * double(limit);
+  // Moving colliders too (as the reference does for animated boundaries): a hand at 2.5 m/s crosses its
+  // single layer of boundary particles in less than a 5 ms step, and the water leaks through it.
+  const BoundarySet& b = ctx.boundary;
+  const Real wallLimit = tbb::parallel_reduce(
+      Range(b.staticCount(), b.size(), kGrain), std::numeric_limits<Real>::max(),
+      [&](const Range& r, Real acc) {
+        for (std::size_t k = r.begin(); k < r.end(); ++k) {
+          const Real speed = b.v[k].norm();
+          if (speed > Real(0))
+            acc = std::min(acc, Real(0.5) * b.support() / speed);
+        }
+        return acc;
+      },
+      [](Real a, Real c) { return std::min(a, c); });
+  const double dt = double(ctx.params.cflFactor) * double(std::min(limit, wallLimit));
   return Real(std::clamp(dt, ctx.params.dtMin, ctx.params.dtMax));
 }
 
+void DfsphSolver::integrateVelocities(SolverContext& ctx, Real dt) {
+  ParticleSet& p = ctx.fluid;
+  tbb::parallel_for(Range(0, p.size(), kGrain), [&](const Range& r) {
+    for (std::size_t i = r.begin(); i < r.end(); ++i)
+      p.v[i] += dt * p.a[i];
+  });
+}
+
+void DfsphSolver::resizeCache(std::vector<Real>& cache, std::size_t n) {
+  // a little room beyond the count, so that lists that grow by a few pairs do not reallocate every step
+  if (cache.capacity() < n)
+    cache.reserve(n + n / 16);
+  cache.resize(n);
+}
+
 std::size_t DfsphSolver::memoryBytes() const {
-  return (m_factor.capacity() + m_rate.capacity() + m_k.capacity()) * sizeof(Real) +
+  return (m_factor.capacity() + m_rate.capacity() + m_k.capacity() + m_gradF.capacity() +
+          m_gradB.capacity()) *
+             sizeof(Real) +
          m_normal.capacity() * sizeof(Vec3);
 }
 

@@ -39,10 +39,13 @@ class DfsphSolver {
   SolveResult divergenceSolve(SolverContext& ctx, Real dt);
   /// gravity, XSPH viscosity over a step of dtPrevious and surface tension (Akinci 2013) into fluid.a
   void nonPressureForces(SolverContext& ctx, Real dtPrevious);
-  /// CFL step: cfl * min_i(2 r_i / |v_i + a_i dt|), clamped to [dt_min, dt_max]
+  /// CFL step: cfl * min_i(2 r_i / |v_i + a_i dt|), clamped to [dt_min, dt_max]; moving boundary particles
+  /// count with their velocity and the boundary's 2 r
   Real cflTimeStep(const SolverContext& ctx, Real dtPrevious) const;
   /// constant-density solve (Algorithm 3 of Bender & Koschier 2017) for step size dt
   SolveResult densitySolve(SolverContext& ctx, Real dt);
+  /// v_i += dt a_i (the non-pressure acceleration)
+  static void integrateVelocities(SolverContext& ctx, Real dt);
 
   /// momentum given to the fluid by boundary particles since the last reset [kg m/s]
   const Vec3d& boundaryImpulse() const { return m_boundaryImpulse; }
@@ -54,8 +57,12 @@ class DfsphSolver {
   std::size_t memoryBytes() const;
 
  private:
-  /// rate of change of the normalised density from the current velocities [1/s]
-  void computeDensityRate(const SolverContext& ctx);
+  /// rate of change of the normalised density from the current velocities into m_rate [1/s], with the
+  /// cached pair gradients; stiffness(i, rate) sets m_k[i] and returns i's error; returns the sum of errors
+  template <class F>
+  double densityRatePass(const SolverContext& ctx, F&& stiffness);
+  /// resizes a per-pair cache with some room to grow
+  static void resizeCache(std::vector<Real>& cache, std::size_t n);
   /// v_i -= dt * sum_j V_j (k_i + k_j) grad W_ij (+ boundary); adds k to `accumulated`; returns boundary
   /// impulse
   Vec3d applyStiffness(SolverContext& ctx, Real dt, std::vector<Real>& accumulated);
@@ -64,6 +71,8 @@ class DfsphSolver {
   std::vector<Real> m_rate;    // density rate or predicted density (normalised)
   std::vector<Real> m_k;       // stiffness of the current iteration [m^2/s^2]
   std::vector<Vec3> m_normal;  // surface-tension normals [-]
+  std::vector<Real> m_gradF;   // V_j grad W_ij / (x_i - x_j) per fluid pair of this step [1/m^2]
+  std::vector<Real> m_gradB;   // the same per boundary pair, with the boundary's scaled volume [1/m^2]
   Vec3d m_boundaryImpulse = Vec3d::Zero();
   Vec3d m_boundaryForce = Vec3d::Zero();
 };

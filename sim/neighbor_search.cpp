@@ -4,6 +4,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <limits>
 #include <sstream>
 
 namespace fp::sim {
@@ -68,88 +70,168 @@ void UniformGrid::sort(const Vec3* x, std::size_t n, std::vector<std::uint32_t>&
   cellStart[0] = 0;
 }
 
+namespace {
+
+/// Distance from coordinate `p` to the slab [lo, lo + cell) along one axis, shrunk by a margin so that
+/// points the cell index rounded into a neighbouring cell are never pruned.
+inline Real slabDistance(Real p, Real lo, Real cell, Real margin) {
+  return std::max({lo - p - margin, p - (lo + cell) - margin, Real(0)});
+}
+
+}  // namespace
+
 void NeighborSearch::build(const UniformGrid& grid, const std::vector<Vec3>& qx, const std::vector<Real>& qH,
                            const std::vector<GridPoints>& sources, int selfSource, Real maxH,
                            NeighborList& out) {
   const std::size_t n = qx.size();
   const std::size_t nChunks = (n + kChunk - 1) / kChunk;
-  if (m_chunks.size() < nChunks)
-    m_chunks.resize(nChunks);
+  const Eigen::Vector3i dims = grid.dims();
+  const Real cell = grid.cellSize();
+  const Real invCell = Real(1) / cell;
+  const Vec3 origin = grid.origin();
+  const Real margin = Real(1e-4) * cell;
   out.offsets.resize(n + 1);
   out.offsets[0] = 0;
-  const Eigen::Vector3i dims = grid.dims();
-  const Real invCell = Real(1) / grid.cellSize();
 
-  tbb::parallel_for(
-      tbb::blocked_range<std::size_t>(0, nChunks, 1), [&](const tbb::blocked_range<std::size_t>& cr) {
-        for (std::size_t chunk = cr.begin(); chunk < cr.end(); ++chunk) {
-          std::vector<std::uint32_t>& buf = m_chunks[chunk].indices;
-          buf.clear();
-          const std::size_t i0 = chunk * kChunk;
-          const std::size_t i1 = std::min(n, i0 + kChunk);
-          for (std::size_t i = i0; i < i1; ++i) {
-            const Vec3 xi = qx[i];
-            const Real Hi = qH[i];
-            const std::size_t before = buf.size();
-            const Eigen::Vector3i c = grid.cellCoord(xi);
-            // reach in cells: the largest pair support this particle can have
-            const int reach = std::max(1, int(std::ceil(Real(0.5) * (Hi + maxH) * invCell)));
-            const int x0 = std::max(0, c.x() - reach), x1 = std::min(dims.x() - 1, c.x() + reach);
-            const int y0 = std::max(0, c.y() - reach), y1 = std::min(dims.y() - 1, c.y() + reach);
-            const int z0 = std::max(0, c.z() - reach), z1 = std::min(dims.z() - 1, c.z() + reach);
-            for (int s = 0; s < int(sources.size()); ++s) {
-              const GridPoints& src = sources[s];
-              const Vec3* sx = src.x;
-              const std::vector<std::uint32_t>& start = *src.cellStart;
-              const bool skipSelf = s == selfSource;
-              for (int cz = z0; cz <= z1; ++cz) {
-                for (int cy = y0; cy <= y1; ++cy) {
-                  // cells x0..x1 of one row are contiguous in the sorted arrays
-                  const std::uint32_t b = start[grid.linear(x0, cy, cz)];
-                  const std::uint32_t e = start[grid.linear(x1, cy, cz) + 1];
-                  if (src.H) {
-                    const Real* sH = src.H;
-                    for (std::uint32_t j = b; j < e; ++j) {
-                      if (skipSelf && j == i)
-                        continue;
-                      const Real h = Real(0.5) * (Hi + sH[j]);
-                      if ((xi - sx[j]).squaredNorm() < h * h)
-                        buf.push_back(j + src.indexOffset);
-                    }
-                  } else {
-                    const Real h = Real(0.5) * (Hi + src.uniformH);
-                    const Real h2 = h * h;
-                    for (std::uint32_t j = b; j < e; ++j) {
-                      if (skipSelf && j == i)
-                        continue;
-                      if ((xi - sx[j]).squaredNorm() < h2)
-                        buf.push_back(j + src.indexOffset);
-                    }
-                  }
-                }
+  // Lists are written once, straight into `out.indices`: each chunk of query points gets a room sized from
+  // its count in the previous build plus slack, and the rooms are then closed up in place. A chunk that
+  // outgrows its room (the first build; adaptivity moving coarse particles into it) spills the rest into a
+  // buffer, and only then are the lists gathered into a new array.
+  out.chunkCounts.resize(nChunks, 0);
+  std::vector<std::size_t> roomStart(nChunks + 1, 0);
+  std::vector<std::uint8_t> overflowed(nChunks, 0);
+  std::vector<std::vector<std::uint32_t>> spills(nChunks);
+  auto searchChunk = [&](std::size_t chunk) {
+    const std::size_t room = roomStart[chunk + 1] - roomStart[chunk];
+    std::uint32_t* dst = out.indices.data() + roomStart[chunk];
+    std::size_t count = 0;
+    std::vector<std::uint32_t>* spill = nullptr;
+    auto emit = [&](std::uint32_t j) {
+      if (count < room) {
+        dst[count] = j;
+      } else {
+        if (!spill)
+          spill = &spills[chunk];
+        spill->push_back(j);
+      }
+      ++count;
+    };
+    const std::size_t i0 = chunk * kChunk;
+    const std::size_t i1 = std::min(n, i0 + kChunk);
+    for (std::size_t i = i0; i < i1; ++i) {
+      const Vec3 xi = qx[i];
+      const Real Hi = qH[i];
+      const Eigen::Vector3i c = grid.cellCoord(xi);
+      for (int s = 0; s < int(sources.size()); ++s) {
+        const GridPoints& src = sources[s];
+        const Vec3* sx = src.x;
+        const std::uint32_t* start = src.cellStart->data();
+        const std::uint32_t skip =
+            s == selfSource ? std::uint32_t(i) : std::numeric_limits<std::uint32_t>::max();
+        const std::uint32_t offset = src.indexOffset;
+        // the largest pair support this particle can have with this source
+        const Real hMax = Real(0.5) * (Hi + (src.H ? maxH : src.uniformH));
+        const Real hMax2 = hMax * hMax;
+        const int reach = std::max(1, int(std::ceil(hMax * invCell)));
+        const int x0 = std::max(0, c.x() - reach), x1 = std::min(dims.x() - 1, c.x() + reach);
+        const int y0 = std::max(0, c.y() - reach), y1 = std::min(dims.y() - 1, c.y() + reach);
+        const int z0 = std::max(0, c.z() - reach), z1 = std::min(dims.z() - 1, c.z() + reach);
+        for (int cz = z0; cz <= z1; ++cz) {
+          const Real dz = slabDistance(xi.z(), origin.z() + Real(cz) * cell, cell, margin);
+          for (int cy = y0; cy <= y1; ++cy) {
+            const Real dy = slabDistance(xi.y(), origin.y() + Real(cy) * cell, cell, margin);
+            const Real dyz2 = dy * dy + dz * dz;
+            if (dyz2 >= hMax2)
+              continue;
+            // the cells of the row that the largest support reaches
+            const Real w = std::sqrt(hMax2 - dyz2) + margin;
+            const int rx0 = std::max(x0, int(std::floor((xi.x() - w - origin.x()) * invCell)));
+            const int rx1 = std::min(x1, int(std::floor((xi.x() + w - origin.x()) * invCell)));
+            if (rx0 > rx1)
+              continue;
+            if (!src.H) {
+              // cells rx0..rx1 of one row are contiguous in the sorted arrays
+              const std::uint32_t b = start[grid.linear(rx0, cy, cz)];
+              const std::uint32_t e = start[grid.linear(rx1, cy, cz) + 1];
+              for (std::uint32_t j = b; j < e; ++j) {
+                if (j != skip && (xi - sx[j]).squaredNorm() < hMax2)
+                  emit(j + offset);
               }
+              continue;
             }
-            out.offsets[i + 1] = std::uint32_t(buf.size() - before);
+            // cells rx0..rx1 of one row are contiguous in the sorted arrays
+            const std::uint32_t b = start[grid.linear(rx0, cy, cz)];
+            const std::uint32_t e = start[grid.linear(rx1, cy, cz) + 1];
+            const Real* sH = src.H;
+            for (std::uint32_t j = b; j < e; ++j) {
+              const Real h = Real(0.5) * (Hi + sH[j]);
+              if (j != skip && (xi - sx[j]).squaredNorm() < h * h)
+                emit(j + offset);
+            }
           }
         }
-      });
-  for (std::size_t i = 0; i < n; ++i)
-    out.offsets[i + 1] += out.offsets[i];
-  out.indices.resize(out.offsets[n]);
+      }
+      // local end of i's list within the chunk; made global below
+      out.offsets[i + 1] = std::uint32_t(count);
+    }
+    out.chunkCounts[chunk] = std::uint32_t(count);
+    overflowed[chunk] = count > room;
+  };
+
+  for (std::size_t chunk = 0; chunk < nChunks; ++chunk) {
+    // last build's count with a quarter of slack; a chunk never seen gets a guess
+    const std::size_t last = out.chunkCounts[chunk];
+    const std::size_t room = last > 0 ? last + last / 4 + 64 : 32 * kChunk;
+    roomStart[chunk + 1] = roomStart[chunk] + room;
+  }
+  const std::size_t total = roomStart[nChunks];
+  if (out.indices.capacity() < total)
+    out.indices.reserve(total + total / 16);
+  out.indices.resize(total);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nChunks, 1),
+                    [&](const tbb::blocked_range<std::size_t>& cr) {
+                      for (std::size_t chunk = cr.begin(); chunk < cr.end(); ++chunk)
+                        searchChunk(chunk);
+                    });
+  std::vector<std::size_t> listStart(nChunks + 1, 0);
+  for (std::size_t chunk = 0; chunk < nChunks; ++chunk)
+    listStart[chunk + 1] = listStart[chunk] + out.chunkCounts[chunk];
+  if (std::find(overflowed.begin(), overflowed.end(), std::uint8_t(1)) == overflowed.end()) {
+    // close up the rooms in place (each moves left, so in chunk order nothing is overwritten before it
+    // is moved)
+    for (std::size_t chunk = 0; chunk < nChunks; ++chunk) {
+      if (listStart[chunk] != roomStart[chunk] && out.chunkCounts[chunk] > 0) {
+        std::memmove(out.indices.data() + listStart[chunk], out.indices.data() + roomStart[chunk],
+                     out.chunkCounts[chunk] * sizeof(std::uint32_t));
+      }
+    }
+    out.indices.resize(listStart[nChunks]);
+  } else {
+    // some chunk outgrew its room (lists grew, or adaptivity moved coarse particles into it): gather into
+    // a new array
+    std::vector<std::uint32_t> merged(listStart[nChunks]);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nChunks, 1),
+                      [&](const tbb::blocked_range<std::size_t>& cr) {
+                        for (std::size_t chunk = cr.begin(); chunk < cr.end(); ++chunk) {
+                          const std::size_t room = roomStart[chunk + 1] - roomStart[chunk];
+                          const std::size_t inRoom = std::min<std::size_t>(room, out.chunkCounts[chunk]);
+                          const auto from = out.indices.begin() + std::ptrdiff_t(roomStart[chunk]);
+                          const auto to = std::copy(from, from + std::ptrdiff_t(inRoom),
+                                                    merged.begin() + std::ptrdiff_t(listStart[chunk]));
+                          std::copy(spills[chunk].begin(), spills[chunk].end(), to);
+                        }
+                      });
+    out.indices.swap(merged);
+  }
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nChunks, 1),
                     [&](const tbb::blocked_range<std::size_t>& cr) {
                       for (std::size_t chunk = cr.begin(); chunk < cr.end(); ++chunk) {
-                        const std::vector<std::uint32_t>& buf = m_chunks[chunk].indices;
-                        std::copy(buf.begin(), buf.end(), out.indices.begin() + out.offsets[chunk * kChunk]);
+                        const std::uint32_t base = std::uint32_t(listStart[chunk]);
+                        const std::size_t i1 = std::min(n, (chunk + 1) * kChunk);
+                        for (std::size_t i = chunk * kChunk; i < i1; ++i)
+                          out.offsets[i + 1] += base;
                       }
                     });
-}
-
-std::size_t NeighborSearch::memoryBytes() const {
-  std::size_t bytes = 0;
-  for (const Chunk& c : m_chunks)
-    bytes += c.indices.capacity() * sizeof(std::uint32_t);
-  return bytes;
 }
 
 }  // namespace fp::sim

@@ -20,6 +20,8 @@ class UniformGrid {
 
   /// edge of a cell [m]
   Real cellSize() const { return m_cellSize; }
+  /// corner of cell (0, 0, 0) [m]
+  const Vec3& origin() const { return m_origin; }
   /// number of cells along x, y, z
   const Eigen::Vector3i& dims() const { return m_dims; }
   /// total number of cells
@@ -36,6 +38,8 @@ class UniformGrid {
   /// deterministic.
   void sort(const Vec3* x, std::size_t n, std::vector<std::uint32_t>& order,
             std::vector<std::uint32_t>& cellStart);
+  /// bytes held by scratch buffers
+  std::size_t memoryBytes() const { return m_cellOf.capacity() * sizeof(std::uint32_t); }
 
  private:
   Vec3 m_origin = Vec3::Zero();
@@ -50,11 +54,13 @@ class UniformGrid {
 struct NeighborList {
   std::vector<std::uint32_t> offsets;  ///< size n + 1
   std::vector<std::uint32_t> indices;  ///< neighbour indices
+  /// neighbours per chunk of query points at the last build: the next build's room estimate
+  std::vector<std::uint32_t> chunkCounts;
   /// number of neighbours of particle i
   std::uint32_t count(std::size_t i) const { return offsets[i + 1] - offsets[i]; }
   /// bytes held
   std::size_t memoryBytes() const {
-    return (offsets.capacity() + indices.capacity()) * sizeof(std::uint32_t);
+    return (offsets.capacity() + indices.capacity() + chunkCounts.capacity()) * sizeof(std::uint32_t);
   }
 };
 
@@ -73,18 +79,13 @@ class NeighborSearch {
   /// Lists, for every query point, its neighbours among each source in `sources` (concatenated, with each
   /// source's indexOffset added), excluding the query point itself when `selfSource` is that source's
   /// position in `sources`
-  /// (-1: none). `maxH` is the largest support radius among all sources.
+  /// (-1: none). `maxH` is the largest support radius among the sources with per-point radii (a source with
+  /// a uniform radius is searched only as far as that radius needs).
   void build(const UniformGrid& grid, const std::vector<Vec3>& qx, const std::vector<Real>& qH,
              const std::vector<GridPoints>& sources, int selfSource, Real maxH, NeighborList& out);
 
-  /// bytes held by scratch buffers
-  std::size_t memoryBytes() const;
-
- private:
-  struct Chunk {
-    std::vector<std::uint32_t> indices;
-  };
-  std::vector<Chunk> m_chunks;
+  /// bytes held by scratch buffers: none, the lists are written in place (kept for callers that sum memory)
+  std::size_t memoryBytes() const { return 0; }
 };
 
 }  // namespace fp::sim

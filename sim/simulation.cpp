@@ -341,20 +341,31 @@ void Simulation::searchNeighbors() {
   if (nKinematic > 0) {
     m_grid.sort(m_boundary.x.data() + nStatic, nKinematic, m_order, m_kinematicCells);
     m_boundary.permute(nStatic, m_order);
-  } else {
-    m_kinematicCells.assign(m_grid.cellCount() + 1, 0);
   }
-  Real maxH = 0;
-  for (Real h : m_fluid.H)
-    maxH = std::max(maxH, h);
-  maxH = std::max(maxH, m_boundary.support());
+  using Range = tbb::blocked_range<std::size_t>;
+  using MinMax = std::pair<Real, Real>;
+  const MinMax hRange = tbb::parallel_reduce(
+      Range(0, m_fluid.size(), 4096), MinMax(std::numeric_limits<Real>::max(), Real(0)),
+      [&](const Range& r, MinMax acc) {
+        for (std::size_t i = r.begin(); i < r.end(); ++i) {
+          acc.first = std::min(acc.first, m_fluid.H[i]);
+          acc.second = std::max(acc.second, m_fluid.H[i]);
+        }
+        return acc;
+      },
+      [](MinMax a, MinMax b) { return MinMax(std::min(a.first, b.first), std::max(a.second, b.second)); });
+  const Real maxH = hRange.second;
 
   GridPoints fluidSrc{m_fluid.x.data(), m_fluid.H.data(), 0, &m_fluidCells, 0};
   m_search.build(m_grid, m_fluid.x, m_fluid.H, {fluidSrc}, 0, maxH, m_fluidNbrs);
-  GridPoints staticSrc{m_boundary.x.data(), nullptr, m_boundary.support(), &m_staticCells, 0};
-  GridPoints kinematicSrc{m_boundary.x.data() + nStatic, nullptr, m_boundary.support(), &m_kinematicCells,
-                          std::uint32_t(nStatic)};
-  m_search.build(m_grid, m_fluid.x, m_fluid.H, {staticSrc, kinematicSrc}, -1, maxH, m_boundaryNbrs);
+  std::vector<GridPoints> walls;
+  if (nStatic > 0)
+    walls.push_back(GridPoints{m_boundary.x.data(), nullptr, m_boundary.support(), &m_staticCells, 0});
+  if (nKinematic > 0) {
+    walls.push_back(GridPoints{m_boundary.x.data() + nStatic, nullptr, m_boundary.support(),
+                               &m_kinematicCells, std::uint32_t(nStatic)});
+  }
+  m_search.build(m_grid, m_fluid.x, m_fluid.H, walls, -1, maxH, m_boundaryNbrs);
 }
 
 void Simulation::integrateAndCheck(Real dt) {
@@ -439,8 +450,7 @@ void Simulation::step() {
 
   m_dt = m_solver.cflTimeStep(ctx, m_dt);
   const Real dt = m_dt;
-  for (std::size_t i = 0; i < n; ++i)
-    m_fluid.v[i] += dt * m_fluid.a[i];
+  DfsphSolver::integrateVelocities(ctx, dt);
   auto t6 = Clock::now();
 
   const SolveResult density = m_solver.densitySolve(ctx, dt);
@@ -485,10 +495,11 @@ double Simulation::pressure(std::size_t i) const {
 std::size_t Simulation::memoryBytes() const {
   return m_fluid.memoryBytes() + m_boundary.memoryBytes() + m_levels.memoryBytes() +
          m_adaptivity.memoryBytes() + m_target.capacity() * sizeof(Real) + m_fluidNbrs.memoryBytes() +
-         m_boundaryNbrs.memoryBytes() + m_search.memoryBytes() + m_solver.memoryBytes() +
+         m_boundaryNbrs.memoryBytes() + m_solver.memoryBytes() +
          (m_order.capacity() + m_fluidCells.capacity() + m_staticCells.capacity() +
           m_kinematicCells.capacity()) *
-             sizeof(std::uint32_t);
+             sizeof(std::uint32_t) +
+         m_grid.memoryBytes();
 }
 
 }  // namespace fp::sim
