@@ -73,7 +73,7 @@ ParamTable::ParamTable() : ParamTableOf<SimParams>("parameter", &ParamTable::val
   add("cfl_limited_refinement", "adaptivity", "-", 0, 1, live,
       "vorticity and velocity difference refine a particle only as far as keeps the time step the surface "
       "allows",
-      &P::cflLimitedRefinement, false);
+      &P::cflLimitedRefinement, true);
   add("split_delay", "adaptivity", "steps", 0, 100, live,
       "solver steps a particle must stay too heavy before it splits", &P::splitDelay, 13);
   add("split_max_children", "adaptivity", "-", 8, 27, live, "n_max: most children of one split",
