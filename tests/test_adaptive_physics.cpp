@@ -101,8 +101,9 @@ TEST(AdaptivePhysicsTest, PropellerDrawsFineParticlesIntoItsVorticesUnlikeSurfac
     meanMass[k] /= frames;
   }
   EXPECT_GT(meanMass[0], 3.0);
-  // measured: 20.1 m_fine in surface mode against 14.2 in fluidplaying (0.71)
-  EXPECT_LT(meanMass[1], 0.8 * meanMass[0]) << "surface " << meanMass[0] << ", fluidplaying " << meanMass[1];
+  // measured: 23.5 m_fine in surface mode against 20.7 in fluidplaying (0.88; 0.71 before the refinement was
+  // CFL-limited, which keeps the fastest water by the blades coarser)
+  EXPECT_LT(meanMass[1], 0.92 * meanMass[0]) << "surface " << meanMass[0] << ", fluidplaying " << meanMass[1];
 }
 
 TEST(AdaptivePhysicsTest, DamBreakSmallLongRunBoundedAndConserving) {
