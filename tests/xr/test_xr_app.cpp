@@ -1,6 +1,8 @@
 // `fluidplaying --xr` against the test runtime (label xr, under Xvfb), with the core validation layer on: the
-// fallback line without a runtime and --xr-required's exit code, and a session that survives LOSS_PENDING, is
-// ended by the runtime, submits every frame it waited for and draws two different eyes.
+// fallback line without a runtime and --xr-required's exit code; a session that survives LOSS_PENDING, is
+// ended by the runtime, submits every frame it waited for and draws two different eyes; recorded hands (and
+// the controllers where there is no hand tracking) push the water and a headless replay of the recording
+// gives the same state bit for bit; the eyes' disparity; frames paced by the display while the solver lags.
 #include <gtest/gtest.h>
 
 #include <sys/wait.h>
@@ -11,6 +13,9 @@
 #include <fstream>
 #include <sstream>
 
+#include <nlohmann/json.hpp>
+
+#include "input/joint_track.h"
 #include "tests/xr/xr_test_env.h"
 
 namespace fp {
@@ -35,6 +40,28 @@ AppRun runApp(const std::string& args) {
 
 std::string dirOf(const char* test) {
   return (std::filesystem::temp_directory_path() / "fp_xr_app_test" / test).string();
+}
+
+nlohmann::json readJson(const std::string& path) {
+  std::ifstream in(path);
+  return in ? nlohmann::json::parse(in, nullptr, false) : nlohmann::json();
+}
+
+const std::string kSource = FP_SOURCE_DIR;
+const std::string kHandTank = " --scene " + kSource + "/assets/scenes/hand_tank.json";
+
+/// the runtime as the app tests use it: virtual time unless told, the head low enough that the tank on its
+/// table is in view, the recording's frame (the hand tank's) on the table; returns the validation file
+std::string useRuntime(const std::string& dir, bool virtualTime = true) {
+  const std::string validation = test::useTestRuntime(dir);
+  setenv("FP_XR_STATS", (dir + "/stats.txt").c_str(), 1);
+  std::filesystem::remove(dir + "/stats.txt");
+  if (virtualTime)
+    setenv("FP_XR_VIRTUAL_TIME", "1", 1);
+  setenv("FP_XR_HEAD", "0,1.1,0,0", 1);
+  setenv("FP_XR_HANDS_OFFSET", "0,0.75,-0.5", 1);
+  setenv("FP_XR_SIZE", "96,80", 1);
+  return validation;
 }
 
 std::vector<unsigned char> readPpm(const std::string& path, int& w, int& h) {
@@ -102,6 +129,175 @@ TEST(XrApp, SessionSurvivesLossPendingEndsWithTheRuntimeAndDrawsBothEyes) {
   for (std::size_t i = 0; i < eye0.size(); ++i)
     differ += eye0[i] != eye1[i];
   EXPECT_GT(differ, eye0.size() / 50) << "the eyes see from 6.4 cm apart";
+}
+
+// The headset run records the hands it tracks (--record-hands) at its frames' simulated times; the headless
+// replay of that file in fixed steps on one thread gives the same fluid, bit for bit. The hands are sized
+// from the first tracked frame, in the replay as in the headset: with --hand-size 2 (where the hands rest
+// before they are seen) the model hand's colliders would be twice the recorded hands' and the runs would
+// differ. And the recorded push moves the water along +x.
+TEST(XrApp, RecordedHandsPushTheWaterAndAHeadlessReplayIsBitIdentical) {
+  if (!std::getenv("DISPLAY"))
+    GTEST_SKIP() << "no display";
+  const std::string dir = dirOf("Replay");
+  const std::string validation = useRuntime(dir);
+  setenv("FP_XR_HANDS", (kSource + "/assets/hands/two_hands_push.csv").c_str(), 1);
+  const std::string recording = dir + "/hands.csv", xrStats = dir + "/xr.json",
+                    replayStats = dir + "/replay.json";
+  for (const std::string& f : {recording, xrStats, replayStats})
+    std::filesystem::remove(f);
+  // 42 frames: the push is under way (0.68 s); uniform-high starts the water at rest
+  const std::string common = kHandTank + " --mode uniform-high --threads 1 --hand-size 2 --quiet";
+  const AppRun live = runApp("--xr --no-window --fixed-step --frames 42 --record-hands " + recording +
+                             " --stats " + xrStats + common);
+  ASSERT_EQ(live.code, 0) << live.output;
+  EXPECT_EQ(test::validationMessages(validation), "");
+  EXPECT_EQ(test::runtimeStat(dir + "/stats.txt", "submitted"), 42);
+  // frame 0 is not tracked yet, frame 1 sizes the hands and starts the water over at t = 0: 41 frames
+  const input::JointTrack track = input::JointTrack::load(recording);
+  ASSERT_EQ(track.frames().size(), 41u);
+  EXPECT_TRUE(track.frames().front().hands[0].valid && track.frames().front().hands[1].valid);
+  const AppRun replay =
+      runApp("--headless --frames 41 --hand-script " + recording + " --stats " + replayStats + common);
+  ASSERT_EQ(replay.code, 0) << replay.output;
+  const nlohmann::json a = readJson(xrStats), b = readJson(replayStats);
+  ASSERT_TRUE(a.is_object() && b.is_object());
+  for (const char* key : {"steps", "sim_seconds", "particles_final", "mass_final", "momentum_final",
+                          "density_error_mean", "density_error_max", "density_iterations_mean"})
+    EXPECT_EQ(a.at(key).dump(), b.at(key).dump()) << key;
+  // the push: 0.40 kg m/s along +x measured, far more than sideways
+  const nlohmann::json& p = a.at("momentum_final");
+  EXPECT_GT(double(p[0]), 0.2);
+  EXPECT_GT(double(p[0]), 4.0 * std::abs(double(p[1])));
+  EXPECT_GT(double(p[0]), 4.0 * std::abs(double(p[2])));
+}
+
+// Without hand tracking the controllers drive the same hands: their grip poses follow the recording's palms
+// (the test runtime's controllers), so the same push moves the water.
+TEST(XrApp, ControllersPushTheWaterWithoutHandTracking) {
+  if (!std::getenv("DISPLAY"))
+    GTEST_SKIP() << "no display";
+  const std::string dir = dirOf("Controllers");
+  const std::string validation = useRuntime(dir);
+  setenv("FP_XR_NO_HANDS", "1", 1);
+  setenv("FP_XR_HANDS", (kSource + "/assets/hands/two_hands_push.csv").c_str(), 1);
+  const std::string recording = dir + "/hands.csv", stats = dir + "/xr.json";
+  std::filesystem::remove(recording);
+  const AppRun run = runApp("--xr --no-window --fixed-step --frames 42 --record-hands " + recording +
+                            " --stats " + stats + kHandTank + " --mode uniform-high --quiet");
+  ASSERT_EQ(run.code, 0) << run.output;
+  EXPECT_EQ(test::validationMessages(validation), "");
+  // the controllers' hands, on the recorded palms
+  const input::JointTrack pushed = input::JointTrack::load(kSource + "/assets/hands/two_hands_push.csv");
+  const input::JointTrack track = input::JointTrack::load(recording);
+  ASSERT_GT(track.frames().size(), 30u);
+  const input::JointFrame& last = track.frames().back();
+  ASSERT_TRUE(last.hands[0].valid && last.hands[1].valid);
+  for (int h = 0; h < 2; ++h) {
+    // the runtime plays the recording in display time: frame 41 is displayed at 42 periods
+    const input::JointFrame rec = pushed.sample(42.0 / 90.0);
+    EXPECT_LT((last.hands[h].joint[0].position - rec.hands[h].joint[0].position).norm(), 0.05) << h;
+  }
+  const nlohmann::json p = readJson(stats).at("momentum_final");
+  EXPECT_GT(double(p[0]), 0.1) << p.dump();
+  EXPECT_GT(double(p[0]), 3.0 * std::abs(double(p[2]))) << p.dump();
+}
+
+// The two eyes of one frame: both show water, and the hands (a feature at a known depth) appear shifted
+// between them as the eyes' offset and their asymmetric fields of view predict. Head at (0, 1.1, 0) looking
+// along -z; the tank 0.5 m ahead; the hands resting over its centre at z = -0.5 -+ 0.09 (left nearer).
+TEST(XrApp, TheEyesDifferByTheirOffsetAndBothShowWater) {
+  if (!std::getenv("DISPLAY"))
+    GTEST_SKIP() << "no display";
+  const std::string dir = dirOf("Eyes");
+  const std::string validation = useRuntime(dir);
+  const int size = 160;
+  setenv("FP_XR_SIZE", "160,160", 1);
+  setenv("FP_XR_CAPTURE", ("3," + dir).c_str(), 1);
+  std::filesystem::remove(dir + "/eye0.ppm");
+  const AppRun run =
+      runApp("--xr --no-window --fixed-step --frames 4 --mode uniform-high --quiet" + kHandTank);
+  ASSERT_EQ(run.code, 0) << run.output;
+  EXPECT_EQ(test::validationMessages(validation), "");
+  struct Mask {
+    double skinColumn = 0, waterColumn = 0;
+    std::size_t skin = 0, water = 0;
+  };
+  std::array<Mask, 2> eye;
+  for (int e = 0; e < 2; ++e) {
+    int w = 0, h = 0;
+    const auto px = readPpm(dir + "/eye" + std::to_string(e) + ".ppm", w, h);
+    ASSERT_EQ(w, size);
+    ASSERT_EQ(h, size);
+    for (int y = 0; y < h; ++y) {
+      for (int x = 0; x < w; ++x) {
+        const int r = px[3 * (y * w + x)], g = px[3 * (y * w + x) + 1], b = px[3 * (y * w + x) + 2];
+        if (r > b + 40 && r > g + 20) {  // skin
+          eye[e].skinColumn += x;
+          ++eye[e].skin;
+        }
+        if (y > h / 2 && b > r + 40 && g > r + 30) {  // water below the horizon (the sky is above it)
+          eye[e].waterColumn += x;
+          ++eye[e].water;
+        }
+      }
+    }
+    ASSERT_GT(eye[e].skin, 40u) << "eye " << e << " shows no hand";
+    EXPECT_GT(eye[e].water, std::size_t(size * size / 20)) << "eye " << e << " shows little water";
+    eye[e].skinColumn /= double(eye[e].skin);
+    eye[e].waterColumn /= double(eye[e].water);
+  }
+  // a point straight ahead at depth d is at column (x / d - tan(left)) / (tan(right) - tan(left)) * width;
+  // the left eye (fov -0.95 .. 0.80 rad) sees it ipd/2 to its right, the right eye (-0.80 .. 0.95) to its
+  // left
+  const double span = std::tan(0.95) + std::tan(0.80), ipd = 0.064;
+  auto disparity = [&](double d) { return (ipd / d + std::tan(0.95) - std::tan(0.80)) / span * size; };
+  const double measured = eye[0].skinColumn - eye[1].skinColumn;
+  // the nearer hand (34.6 px at 0.41 m) covers most of the farther one (31.4 px at 0.59 m): 34.4 px measured
+  EXPECT_GT(measured, disparity(0.59) - 0.5) << "near " << disparity(0.41);
+  EXPECT_LT(measured, disparity(0.41) + 0.5) << "far " << disparity(0.59);
+  // without the eye offset the shift would be the fields of view's asymmetry alone (24.3 px, infinitely far)
+  EXPECT_GT(measured, disparity(1e9) + 5.0);
+  // the water spans the tank's depth around 0.5 m
+  const double water = eye[0].waterColumn - eye[1].waterColumn;
+  EXPECT_GT(water, disparity(0.8));
+  EXPECT_LT(water, disparity(0.3));
+}
+
+// Frame pacing in real time: the solver at uniform-high resolution needs several times the display period
+// for a period of simulated time, yet after the first frames (shaders compiled) every display period gets
+// exactly one frame, submitted before its display time; the water slows instead.
+TEST(XrApp, EveryPeriodGetsOneFrameWhileTheSolverLags) {
+  if (!std::getenv("DISPLAY"))
+    GTEST_SKIP() << "no display";
+  const std::string dir = dirOf("Pacing");
+  const std::string validation = useRuntime(dir, false);
+  const long period = 200000000;  // 5 Hz: room for two llvmpipe eyes on a loaded CI machine
+  setenv("FP_XR_PERIOD_NS", std::to_string(period).c_str(), 1);
+  const std::string log = dir + "/frames.txt";
+  std::filesystem::remove(log);
+  setenv("FP_XR_FRAME_LOG", log.c_str(), 1);
+  const int frames = 14;
+  const AppRun run =
+      runApp("--xr --no-window --frames " + std::to_string(frames) + " --mode uniform-high" + kHandTank);
+  ASSERT_EQ(run.code, 0) << run.output;
+  EXPECT_EQ(test::validationMessages(validation), "");
+  std::ifstream in(log);
+  std::vector<std::pair<long long, long long>> ends;  // display time, xrEndFrame time [ns]
+  long long display = 0, end = 0;
+  while (in >> display >> end)
+    ends.emplace_back(display, end);
+  ASSERT_EQ(int(ends.size()), frames);
+  for (std::size_t i = 3; i < ends.size(); ++i) {
+    EXPECT_EQ(ends[i].first - ends[i - 1].first, period)
+        << "frame " << i << ": a display period without a frame";
+    EXPECT_LT(ends[i].second, ends[i].first) << "frame " << i << " submitted after its display time";
+  }
+  // the simulation fell behind: less simulated time than displayed
+  const std::size_t at = run.output.find("simulated ");
+  ASSERT_NE(at, std::string::npos) << run.output;
+  const double simulated = std::atof(run.output.c_str() + at + 10);
+  EXPECT_LT(simulated, 0.5 * frames * period * 1e-9) << run.output;
 }
 
 }  // namespace
