@@ -269,18 +269,19 @@ TEST(XrApp, TheEyesDifferByTheirOffsetAndBothShowWater) {
 
 // Frame pacing in real time: the solver at uniform-high resolution needs several times the display period
 // for a period of simulated time, yet after the first frames (shaders compiled) every display period gets
-// exactly one frame, submitted before its display time; the water slows instead.
+// exactly one frame, submitted before its display time; the water slows instead. (A real-time test: on a
+// machine loaded far beyond its cores it can fail.)
 TEST(XrApp, EveryPeriodGetsOneFrameWhileTheSolverLags) {
   if (!std::getenv("DISPLAY"))
     GTEST_SKIP() << "no display";
   const std::string dir = dirOf("Pacing");
   const std::string validation = useRuntime(dir, false);
-  const long period = 200000000;  // 5 Hz: room for two llvmpipe eyes on a loaded CI machine
+  const long period = 250000000;  // 4 Hz: room for two llvmpipe eyes on a loaded machine
   setenv("FP_XR_PERIOD_NS", std::to_string(period).c_str(), 1);
   const std::string log = dir + "/frames.txt";
   std::filesystem::remove(log);
   setenv("FP_XR_FRAME_LOG", log.c_str(), 1);
-  const int frames = 14;
+  const int frames = 16;
   const AppRun run =
       runApp("--xr --no-window --frames " + std::to_string(frames) + " --mode uniform-high" + kHandTank);
   ASSERT_EQ(run.code, 0) << run.output;
@@ -291,7 +292,7 @@ TEST(XrApp, EveryPeriodGetsOneFrameWhileTheSolverLags) {
   while (in >> display >> end)
     ends.emplace_back(display, end);
   ASSERT_EQ(int(ends.size()), frames);
-  for (std::size_t i = 3; i < ends.size(); ++i) {
+  for (std::size_t i = 5; i < ends.size(); ++i) {
     EXPECT_EQ(ends[i].first - ends[i - 1].first, period)
         << "frame " << i << ": a display period without a frame";
     EXPECT_LT(ends[i].second, ends[i].first) << "frame " << i << " submitted after its display time";
