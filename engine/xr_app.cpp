@@ -196,6 +196,8 @@ class XrPlatform : public AppPlatform {
     if (m_mirror)
       m_mirror->finish();
   }
+  /// asks the session to end, as Ctrl+C does (the end of --frames)
+  void requestExit() { m_exitAsked = true; }
   int submitted() const { return m_submitted; }
   int recreated() const { return m_recreated; }
 
@@ -206,7 +208,7 @@ class XrPlatform : public AppPlatform {
   /// through STOPPING to EXITING); true when there is no running session to wait for, and the loop stops
   bool wantsExit() {
     using Clock = std::chrono::steady_clock;
-    const bool asked = g_interrupted || (m_mirror && m_mirror->closeRequested());
+    const bool asked = g_interrupted || m_exitAsked || (m_mirror && m_mirror->closeRequested());
     if (asked && !m_exitRequested) {
       m_exitRequested = true;
       m_exitDeadline = Clock::now() + std::chrono::seconds(5);
@@ -231,6 +233,7 @@ class XrPlatform : public AppPlatform {
   XrProgram::FrameTiming m_timing;
   bool m_frameActive = false;
   bool m_exit = false;
+  bool m_exitAsked = false;
   bool m_exitRequested = false;
   std::chrono::steady_clock::time_point m_exitDeadline;
   bool m_placed = false;
@@ -284,6 +287,11 @@ int runXrApp(const CliOptions& options, std::ostream& out) {
   g_interrupted = 0;
   auto previous = std::signal(SIGINT, onInterrupt);
   const int frames = runAppLoop(session, platform, options.frames);
+  if (platform.running()) {
+    // --frames reached: the session still ends as the spec says, through STOPPING and EXITING
+    platform.requestExit();
+    runAppLoop(session, platform, std::nullopt);
+  }
   std::signal(SIGINT, previous);
   platform.finish();
   if (!options.quiet) {

@@ -251,5 +251,20 @@ TEST(XrMirror, InterruptEndsTheSessionInOrder) {
   EXPECT_EQ(test::validationMessages(validation), "");
 }
 
+TEST(XrMirror, FramesLimitEndsTheSessionInOrder) {
+  if (!std::getenv("DISPLAY"))
+    GTEST_SKIP() << "no display";
+  const std::string dir = dirOf("Frames"), stats = dir + "/stats.txt";
+  const std::string validation = useRunningSession(dir, stats);
+  const pid_t pid = spawnApp({"--xr", "--quiet", "--frames", "12", "--width", "320", "--height", "200",
+                              "--scene", FP_SOURCE_DIR "/assets/scenes/tiny_dam_break.json"},
+                             dir + "/log.txt");
+  EXPECT_EQ(waitExit(pid, 60.0), 0) << test::validationMessages(dir + "/log.txt");
+  EXPECT_EQ(test::runtimeStat(stats, "ended"), 1);
+  EXPECT_EQ(test::runtimeStat(stats, "instances_destroyed"), 1);
+  EXPECT_EQ(test::runtimeStat(stats, "submitted"), test::runtimeStat(stats, "waited"));
+  EXPECT_EQ(test::validationMessages(validation), "");
+}
+
 }  // namespace
 }  // namespace fp
