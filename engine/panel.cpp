@@ -312,6 +312,18 @@ const std::vector<std::pair<const char*, const char*>>& controls() {
   return list;
 }
 
+const std::vector<std::pair<const char*, const char*>>& headsetControls() {
+  static const std::vector<std::pair<const char*, const char*>> list = [] {
+    std::vector<std::pair<const char*, const char*>> rows;
+    for (const KeyBinding& b : keyBindings()) {
+      if (!b.hand)
+        rows.emplace_back(b.name, b.help);
+    }
+    return rows;
+  }();
+  return list;
+}
+
 void toggleHandRecording(AppSession& session, PanelState& state) {
   state.message = session.toggleRecording(state.recordingPath);
 }
@@ -330,7 +342,7 @@ void drawHelp(PanelState& state) {
   ImGui::SetNextWindowBgAlpha(0.85f);
   ImGui::Begin("controls", &state.help, ImGuiWindowFlags_AlwaysAutoResize | ImGuiWindowFlags_NoCollapse);
   if (ImGui::BeginTable("keys", 2)) {
-    for (const auto& [key, action] : controls()) {
+    for (const auto& [key, action] : state.headset ? headsetControls() : controls()) {
       ImGui::TableNextRow();
       ImGui::TableNextColumn();
       ImGui::TextUnformatted(key);

@@ -37,6 +37,8 @@ void drawHelp(PanelState& state);
 /// The mouse and keyboard controls: (input, action), as the help overlay and the README list them: the
 /// mouse and held keys of engine/view_control, then the keys of engine/key_map.
 const std::vector<std::pair<const char*, const char*>>& controls();
+/// The keys of the headset mode's mirror window (no mouse hand): the help overlay's rows there.
+const std::vector<std::pair<const char*, const char*>>& headsetControls();
 
 /// Starts or stops (and saves) the hand recording at state.recordingPath (F5 and its button).
 void toggleHandRecording(AppSession& session, PanelState& state);

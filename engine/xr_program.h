@@ -71,6 +71,8 @@ class XrProgram {
   void createSession(const GlxBinding& binding);
   /// true while a session exists
   bool hasSession() const;
+  /// true between xrBeginSession and xrEndSession (the session may be asked to exit)
+  bool sessionRunning() const;
   /// the reference space is STAGE (false: LOCAL)
   bool stageSpace() const;
   /// Polls the runtime's events and follows the lifecycle: begins the session on READY, ends it on STOPPING,

@@ -33,6 +33,12 @@ TEST(KeyMap, EveryKeyDeclaredOnceAndListedInTheHelp) {
   for (const auto& [input, action] : ViewControl::controls())
     EXPECT_EQ(help.count(input), 1u) << input;
   EXPECT_EQ(controls().size(), keyBindings().size() + ViewControl::controls().size());
+  // the headset's mirror lists the keys that act there: none of the mouse hand's
+  std::size_t handKeys = 0;
+  for (const KeyBinding& b : keyBindings())
+    handKeys += b.hand;
+  EXPECT_GT(handKeys, 0u);
+  EXPECT_EQ(headsetControls().size(), keyBindings().size() - handKeys);
 }
 
 TEST(KeyMap, PressesDoWhatTheHelpSays) {

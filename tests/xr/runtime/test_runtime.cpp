@@ -263,6 +263,7 @@ std::vector<JointFrame> g_joints;
 std::int64_t g_startNs = 0;
 struct Stats {
   long submitted = 0, waited = 0, missed = 0, sessions = 0, begun = 0, ended = 0, layers = 0;
+  long instancesDestroyed = 0;  // xrDestroyInstance calls (the mirror tests check an orderly end)
 } g_stats;
 
 template <class T>
@@ -318,6 +319,7 @@ void writeStats() {
   out << "submitted " << g_stats.submitted << "\nwaited " << g_stats.waited << "\nmissed " << g_stats.missed
       << "\nsessions " << g_stats.sessions << "\nbegun " << g_stats.begun << "\nended " << g_stats.ended
       << "\nlayers " << g_stats.layers << "\nperiod_ns " << g_config->period << "\n";
+  out << "instances_destroyed " << g_stats.instancesDestroyed << "\n";
 }
 
 void queueState(Instance& inst, std::uint64_t session, XrSessionState state) {
@@ -597,6 +599,7 @@ XRAPI_ATTR XrResult XRAPI_CALL DestroyInstance(XrInstance instance) {
   if (!lookup<Instance>(handleOf(instance), Kind::Instance))
     return XR_ERROR_HANDLE_INVALID;
   destroyTree(handleOf(instance));
+  ++g_stats.instancesDestroyed;
   writeStats();
   return XR_SUCCESS;
 }
