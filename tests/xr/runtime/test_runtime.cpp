@@ -102,6 +102,7 @@ struct Config {
   std::string hands = env("FP_XR_HANDS");
   std::string events = env("FP_XR_EVENTS");
   std::string stats = env("FP_XR_STATS");
+  std::string frameLog = env("FP_XR_FRAME_LOG");  // a line per xrEndFrame: display time, end time [ns]
   std::string capture =
       env("FP_XR_CAPTURE");  // "FRAME,DIR": the eyes of frame FRAME as DIR/eye0.ppm, eye1.ppm
   std::string profile = env("FP_XR_PROFILE", "/interaction_profiles/khr/simple_controller");
@@ -262,6 +263,7 @@ std::vector<JointFrame> g_joints;
 std::int64_t g_startNs = 0;
 struct Stats {
   long submitted = 0, waited = 0, missed = 0, sessions = 0, begun = 0, ended = 0, layers = 0;
+  long instancesDestroyed = 0;  // xrDestroyInstance calls (the mirror tests check an orderly end)
 } g_stats;
 
 template <class T>
@@ -317,6 +319,7 @@ void writeStats() {
   out << "submitted " << g_stats.submitted << "\nwaited " << g_stats.waited << "\nmissed " << g_stats.missed
       << "\nsessions " << g_stats.sessions << "\nbegun " << g_stats.begun << "\nended " << g_stats.ended
       << "\nlayers " << g_stats.layers << "\nperiod_ns " << g_config->period << "\n";
+  out << "instances_destroyed " << g_stats.instancesDestroyed << "\n";
 }
 
 void queueState(Instance& inst, std::uint64_t session, XrSessionState state) {
@@ -596,6 +599,7 @@ XRAPI_ATTR XrResult XRAPI_CALL DestroyInstance(XrInstance instance) {
   if (!lookup<Instance>(handleOf(instance), Kind::Instance))
     return XR_ERROR_HANDLE_INVALID;
   destroyTree(handleOf(instance));
+  ++g_stats.instancesDestroyed;
   writeStats();
   return XR_SUCCESS;
 }
@@ -983,6 +987,10 @@ XRAPI_ATTR XrResult XRAPI_CALL EndFrame(XrSession session, const XrFrameEndInfo*
     }
   }
   s->begun = false;
+  if (!g_config->frameLog.empty()) {
+    std::ofstream log(g_config->frameLog, std::ios::app);
+    log << s->waitedDisplay << ' ' << runtimeNow() << '\n';
+  }
   ++g_stats.submitted;
   g_stats.layers += info->layerCount;
   if (s->frame % 16 == 0)
