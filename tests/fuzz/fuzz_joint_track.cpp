@@ -1,6 +1,7 @@
-// Joint recordings of tracked hands (the headset's CSV): any bytes are loaded (no crash, no sanitizer report);
-// a track that loads is sampled across and beyond its span, every valid hand's joints must be finite with a
-// positive radius, and the hand's colliders are placed on them (input::partPosesFromJoints) without a NaN.
+// Joint recordings of tracked hands (the headset's CSV): any bytes are loaded (no crash, no sanitizer
+// report); a track that loads is sampled across and beyond its span, every valid hand's joints must be finite
+// with a positive radius, and the hand's colliders are placed on them (input::partPosesFromJoints) without a
+// NaN.
 
 #include <cmath>
 #include <cstddef>
