@@ -289,8 +289,11 @@ TEST(XrApp, EveryPeriodGetsOneFrameWhileTheSolverLags) {
   std::ifstream in(log);
   std::vector<std::pair<long long, long long>> ends;  // display time, xrEndFrame time [ns]
   long long display = 0, end = 0;
-  while (in >> display >> end)
-    ends.emplace_back(display, end);
+  for (std::string line; std::getline(in, line);) {
+    std::istringstream fields(line);
+    if (fields >> display >> end)
+      ends.emplace_back(display, end);
+  }
   ASSERT_EQ(int(ends.size()), frames);
   for (std::size_t i = 5; i < ends.size(); ++i) {
     EXPECT_EQ(ends[i].first - ends[i - 1].first, period)
