@@ -6,6 +6,7 @@
 #include <iomanip>
 #include <ostream>
 
+#include "input/joint_track.h"
 #include "sim/metrics.h"
 #include "sim/ply_writer.h"
 
@@ -101,6 +102,10 @@ SessionConfig sessionConfigOf(const CliOptions& options) {
   c.seed = options.seed;
   c.sets = options.sets;
   c.handScript = options.handScript;
+  if (input::JointTrack::isJointFile(c.handScript)) {
+    c.handScript.clear();  // a joint recording: the tracked hands replay it (engine/tracked_hands.h)
+    c.hand = false;
+  }
   c.fixedStep = options.fixedStep;
   c.timeScale = options.timeScale;
   c.handScale = options.handScale;

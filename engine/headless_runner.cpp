@@ -7,6 +7,7 @@
 #include <iomanip>
 
 #include "engine/headless_app.h"
+#include "engine/tracked_hands.h"
 
 namespace fp::engine {
 
@@ -42,9 +43,10 @@ RunSummary runHeadless(const CliOptions& options, std::ostream& out, std::ostrea
     if (ec)
       throw sim::InputError(options.exportDir + ": cannot create export directory (" + ec.message() + ")");
   }
+  const std::optional<JointReplay> joints = JointReplay::ofScript(options.handScript);
   SessionConfig config = sessionConfigOf(options);
-  config.fixedStep = true;                    // no wall clock: every frame is 1 / frame_rate
-  config.hand = !options.handScript.empty();  // the scene alone, unless a recorded hand plays in it
+  config.fixedStep = true;                   // no wall clock: every frame is 1 / frame_rate
+  config.hand = !config.handScript.empty();  // the scene alone, unless a recorded hand plays in it
   AppSession session(config);
   const sim::SceneDesc& scene = session.scene();
   double simTime = scene.simTime;
@@ -73,7 +75,8 @@ RunSummary runHeadless(const CliOptions& options, std::ostream& out, std::ostrea
   }
 
   HeadlessPlatform platform(options, scene.frameRate, simTime, s, progress, onFrame);
-  runAppLoop(session, platform, std::nullopt);
+  JointReplayPlatform replay(platform, joints, session, options.handScale);
+  runAppLoop(session, replay, std::nullopt);
   s.wallSeconds = platform.wallSeconds();
   s.frames = platform.frames();
   const double taken = double(std::max(s.frames, 0) + 1);

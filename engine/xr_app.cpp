@@ -11,6 +11,8 @@
 #include "engine/cli_app.h"
 #include "engine/gl_window.h"
 #include "engine/headless_app.h"
+#include "engine/headless_runner.h"
+#include "engine/tracked_hands.h"
 #include "engine/xr_mirror.h"
 #include "engine/xr_program.h"
 #include "input/joint_track.h"
@@ -21,6 +23,10 @@
 namespace fp::engine {
 
 namespace {
+
+/// simulated time within which the first tracked hand sizes the hands' colliders (the session starts over)
+/// [s]
+constexpr double kSizingWindow = 0.5;
 
 volatile std::sig_atomic_t g_interrupted = 0;
 void onInterrupt(int) {
@@ -141,20 +147,31 @@ class XrPlatform : public AppPlatform {
       m_placement.place(head, turn, m_xr.stageSpace());
       m_recentre = false;
     }
-    input::JointFrame record;
-    record.time = m_recordTime;
-    for (std::size_t k = 0; k < session.trackedHandCount() && k < 2; ++k) {
-      std::optional<std::array<input::PartPose, input::HandModel::kParts>> parts;
-      if (hands.joints[k]) {
-        const input::HandJoints scene = m_placement.toScene(*hands.joints[k]);
-        parts = input::partPosesFromJoints(scene);
-        record.hands[k] = scene;
-      }
-      session.setTrackedHandTarget(k, parts, m_timing.period);
+    TrackedJoints joints;
+    for (std::size_t k = 0; k < joints.size(); ++k) {
+      if (hands.joints[k])
+        joints[k] = m_placement.toScene(*hands.joints[k]);
     }
-    if (!m_options.recordHands.empty())
-      m_recording.add(record);
-    m_recordTime += m_timing.period;
+    if (!m_sized) {
+      // the hands' colliders take the tracked hands' sizes from the first frame one is seen in, while the
+      // water has barely started (the session starts over)
+      const bool tracked = joints[0] || joints[1];
+      if (tracked && !hands.fromControllers)
+        attachTrackedHands(session, joints, m_options.handScale);
+      m_sized = tracked || session.simulation().time() > kSizingWindow;
+    }
+    // the hands ease in simulated time: a fixed-step frame is one frame of the scene
+    setTrackedTargets(session, joints, session.fixedStep ? 1.0 / session.scene().frameRate : m_timing.period);
+    if (!m_options.recordHands.empty()) {
+      // at the simulated time of the frame, where a replay (engine/tracked_hands.h) looks for it
+      input::JointFrame record;
+      record.time = session.simulation().time();
+      for (std::size_t k = 0; k < joints.size(); ++k) {
+        if (joints[k])
+          record.hands[k] = *joints[k];
+      }
+      m_recording.put(record);
+    }
   }
 
   void capture(AppSession& session, int) override {
@@ -241,7 +258,7 @@ class XrPlatform : public AppPlatform {
   int m_submitted = 0;
   int m_recreated = 0;
   input::JointTrack m_recording;
-  double m_recordTime = 0.0;
+  bool m_sized = false;
 };
 
 }  // namespace
@@ -263,14 +280,8 @@ int runXrApp(const CliOptions& options, std::ostream& out) {
   sim::Aabb water;
   for (const sim::FluidBlock& b : probe.scene().fluid)
     water.extend(b.box);
-  const input::HandModel model(options.handScale);
-  const input::HandPose rest = restingHandPose(probe.scene(), model);
   AppSession& session = probe;
-  session.setTrackedHands(
-      {{input::HandSide::Left, input::jointsOfHandPose(model, rest, input::HandSide::Left)},
-       {input::HandSide::Right, input::jointsOfHandPose(model, rest, input::HandSide::Right)}});
-  session.requests().reset = true;  // rebuild with the tracked hands
-  session.applyRequests();
+  attachTrackedHands(session, {}, options.handScale);  // the model hand until a tracked one is seen
   std::unique_ptr<XrMirror> mirror;
   if (mirrored)
     mirror = std::make_unique<XrMirror>(*gl, options, options.frames);
@@ -294,6 +305,14 @@ int runXrApp(const CliOptions& options, std::ostream& out) {
   }
   std::signal(SIGINT, previous);
   platform.finish();
+  if (!options.statsPath.empty()) {
+    RunSummary summary;
+    summary.scene = options.scenePath;
+    summary.mode = sim::modeName(session.simulation().mode());
+    summary.frames = frames;
+    fillRunFigures(session.simulation(), summary);
+    writeStatsJson(options.statsPath, summary);
+  }
   if (!options.quiet) {
     out << "frames " << frames << ", submitted " << platform.submitted() << ", sessions recreated "
         << platform.recreated() << ", simulated " << session.simulation().time() << " s\n";

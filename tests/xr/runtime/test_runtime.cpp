@@ -102,6 +102,7 @@ struct Config {
   std::string hands = env("FP_XR_HANDS");
   std::string events = env("FP_XR_EVENTS");
   std::string stats = env("FP_XR_STATS");
+  std::string frameLog = env("FP_XR_FRAME_LOG");  // a line per xrEndFrame: display time, end time [ns]
   std::string capture =
       env("FP_XR_CAPTURE");  // "FRAME,DIR": the eyes of frame FRAME as DIR/eye0.ppm, eye1.ppm
   std::string profile = env("FP_XR_PROFILE", "/interaction_profiles/khr/simple_controller");
@@ -986,6 +987,10 @@ XRAPI_ATTR XrResult XRAPI_CALL EndFrame(XrSession session, const XrFrameEndInfo*
     }
   }
   s->begun = false;
+  if (!g_config->frameLog.empty()) {
+    std::ofstream log(g_config->frameLog, std::ios::app);
+    log << s->waitedDisplay << ' ' << runtimeNow() << '\n';
+  }
   ++g_stats.submitted;
   g_stats.layers += info->layerCount;
   if (s->frame % 16 == 0)
