@@ -3,6 +3,7 @@
 #include <tbb/global_control.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <iomanip>
 
@@ -47,6 +48,7 @@ RunSummary runHeadless(const CliOptions& options, std::ostream& out, std::ostrea
   SessionConfig config = sessionConfigOf(options);
   config.fixedStep = true;                   // no wall clock: every frame is 1 / frame_rate
   config.hand = !config.handScript.empty();  // the scene alone, unless a recorded hand plays in it
+  config.recover = false;                    // an instability ends the run (exit 4)
   AppSession session(config);
   const sim::SceneDesc& scene = session.scene();
   double simTime = scene.simTime;
@@ -54,7 +56,9 @@ RunSummary runHeadless(const CliOptions& options, std::ostream& out, std::ostrea
     simTime = *options.simTime;
   if (options.frames)
     simTime = double(*options.frames) / scene.frameRate;
-  session.setEndTime(simTime);
+  // a loaded state: the run goes on from its frame, so it ends where the uninterrupted run would
+  const double startTime = std::round(session.simulation().time() * scene.frameRate) / scene.frameRate;
+  session.setEndTime(startTime + simTime);
 
   const sim::Simulation& simulation = session.simulation();
   RunSummary s;
@@ -75,6 +79,7 @@ RunSummary runHeadless(const CliOptions& options, std::ostream& out, std::ostrea
   }
 
   HeadlessPlatform platform(options, scene.frameRate, simTime, s, progress, onFrame);
+  platform.setStartTime(startTime);
   JointReplayPlatform replay(platform, joints, session, options.handScale);
   runAppLoop(session, replay, std::nullopt);
   s.wallSeconds = platform.wallSeconds();

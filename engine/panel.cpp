@@ -140,6 +140,21 @@ void runControls(AppSession& session, PanelState& state) {
   ImGui::SameLine();
   if (ImGui::Button("Reset (R)"))
     session.requests().reset = true;
+  // issue 15: the state to come back to, and the way back
+  ImGui::SameLine();
+  if (ImGui::Button("Save state")) {
+    try {
+      session.saveStateNow();
+      state.message = "state saved to " + session.savedStatePath();
+    } catch (const sim::InputError& e) {
+      state.message = e.what();
+    }
+  }
+  if (!session.savedStatePath().empty()) {
+    ImGui::SameLine();
+    if (ImGui::Button("Reset to saved state"))
+      session.requests().resetToSavedState = true;
+  }
   float scale = float(session.timeScale);
   if (ImGui::SliderFloat("time scale", &scale, 0.05f, 4.0f, "%.2f", ImGuiSliderFlags_Logarithmic))
     session.timeScale = double(scale);
@@ -164,6 +179,8 @@ void runControls(AppSession& session, PanelState& state) {
     ImGui::TextColored(ImVec4(1, 0.4f, 0.3f, 1), "%s (R resets)", session.error().c_str());
   if (session.restartPending())
     ImGui::TextColored(ImVec4(1, 0.8f, 0.3f, 1), "parameters marked * apply on Reset");
+  if (session.recovery().rollbacks > 0)  // issue 15: what the last rollback did
+    ImGui::TextColored(ImVec4(1, 0.8f, 0.3f, 1), "%s", session.recovery().message.c_str());
 }
 
 void handControls(AppSession& session, PanelState& state) {

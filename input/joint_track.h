@@ -4,10 +4,11 @@
 /// desktop or headless.
 ///
 /// CSV: the header "time,hand,joint,valid,px,py,pz,qw,qx,qy,qz,radius", then one line per joint: time [s]
-/// from the start, hand "left" or "right", the joint's name (input/joint_hand.h: palm, wrist,
-/// thumb_metacarpal, ..., little_tip), valid 1 (tracked) or 0, position [m] and orientation (joint -> world,
-/// w first) in the world frame of the scene, radius [m]. A frame is the lines with one time: 26 lines of each
-/// hand it has, in joint order; a hand without lines, or with valid 0, is not tracked in that frame.
+/// from the start (the headset records a frame's simulated time, see engine/tracked_hands.h), hand "left" or
+/// "right", the joint's name (input/joint_hand.h: palm, wrist, thumb_metacarpal, ..., little_tip), valid 1
+/// (tracked) or 0, position [m] and orientation (joint -> world, w first) in the world frame of the scene,
+/// radius [m]. A frame is the lines with one time: 26 lines of each hand it has, in joint order; a hand
+/// without lines, or with valid 0, is not tracked in that frame.
 
 #include <array>
 #include <string>
