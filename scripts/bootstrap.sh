@@ -190,8 +190,9 @@ readonly FUZZ_TARGETS=(scene preset pose_track joint_track state)
 run_fuzzers() {
   section "Fuzz build (libFuzzer, clang, build-fuzz/)"
   command -v clang++ >/dev/null 2>&1 || die "clang++ not found (package clang)"
+  # no -Werror here: the Release build holds gcc's warnings at zero; clang's extra ones are only shown
   cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang \
-    -DCMAKE_CXX_COMPILER=clang++ -DFP_FUZZ=ON -DFP_BUILD_TESTS=OFF -DFP_WERROR=ON ||
+    -DCMAKE_CXX_COMPILER=clang++ -DFP_FUZZ=ON -DFP_BUILD_TESTS=OFF ||
     die "the fuzz build could not be configured"
   local targets=() name
   for name in "${FUZZ_TARGETS[@]}"; do
