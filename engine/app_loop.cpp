@@ -21,7 +21,7 @@ int runAppLoop(AppSession& session, AppPlatform& platform, std::optional<int> fr
       platform.draw(session, frame);
     ++frame;
   }
-  session.finishSteps();
+  session.endRun();  // the last steps joined; --save-state written
   return frame;
 }
 

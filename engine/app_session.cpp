@@ -3,9 +3,13 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <iomanip>
+#include <sstream>
 
 #include "engine/cli.h"
 #include "engine/scene_loader.h"
+#include "sim/param_table.h"
+#include "sim/state_io.h"
 
 namespace fp::engine {
 
@@ -67,6 +71,8 @@ AppSession::AppSession(const SessionConfig& config) : m_config(config) {
   if (!config.handScript.empty())
     m_replay = input::PoseTrack::load(config.handScript);
   build();
+  if (!config.loadState.empty())
+    loadStateFile(config.loadState);
 }
 
 AppSession::~AppSession() {
@@ -132,7 +138,127 @@ void AppSession::build() {
   m_restartPending = false;
   m_handScalePending = false;
   m_error.clear();
+  m_snapshots.clear();
+  m_snapshotEdits.clear();
+  m_recovery = RecoveryReport{};
   m_lastFinish = Clock::now();
+}
+
+namespace {
+// the owner's numbers of a saved state: a tag, the hand pose (position, orientation, gestures), the replay's
+// start and the fixed-step frame target
+constexpr double kAppStateTag = 1501.0;
+constexpr std::size_t kAppStateSize = 12;
+}  // namespace
+
+std::vector<double> AppSession::appState() const {
+  const input::HandPose& h = m_handPose;
+  return {kAppStateTag,      h.position.x(),    h.position.y(),    h.position.z(), h.orientation.w(),
+          h.orientation.x(), h.orientation.y(), h.orientation.z(), h.grip,         h.point,
+          m_replayStart,     m_targetTime};
+}
+
+void AppSession::restoreAppState(const std::vector<double>& e) {
+  input::HandPose& h = m_handPose;
+  h.position = sim::Vec3d(e[1], e[2], e[3]);
+  h.orientation = sim::Quatd(e[4], e[5], e[6], e[7]);
+  h.grip = e[8];
+  h.point = e[9];
+  m_replayStart = e[10];
+  m_targetTime = e[11];
+  m_handTarget = m_handPose;
+  m_segment = input::PoseTrack();
+  m_mouseHand.place(m_handPose);
+}
+
+void AppSession::saveStateNow(const std::string& path) {
+  const std::string file = !path.empty()                 ? path
+                           : !m_config.saveState.empty() ? m_config.saveState
+                                                         : "fluidplaying_state.bin";
+  sim::saveState(file, *m_sim, appState());
+  m_savedStatePath = file;
+}
+
+void AppSession::loadStateFile(const std::string& path) {
+  // the state now, put back when the app's numbers of the file are bad (the simulation's own are checked by
+  // loadState, which leaves it unchanged when it refuses the file)
+  const std::string before = sim::encodeState(*m_sim, appState());
+  const std::vector<double> extra = sim::loadState(path, *m_sim);
+  std::string bad;
+  if (extra.size() != kAppStateSize || extra[0] != kAppStateTag) {
+    bad = "not saved by the app (" + std::to_string(extra.size()) + " app numbers)";
+  } else if (!std::all_of(extra.begin(), extra.end(), [](double v) { return std::isfinite(v); })) {
+    bad = "a non-finite hand pose or time";
+  } else if (std::abs(sim::Quatd(extra[4], extra[5], extra[6], extra[7]).norm() - 1.0) > 1e-6) {
+    bad = "the hand's orientation is not a unit quaternion";
+  }
+  if (!bad.empty()) {
+    sim::decodeState(before, *m_sim);
+    throw sim::StateError(path + ": corrupt: " + bad);
+  }
+  restoreAppState(extra);
+  m_params = m_sim->params();
+  m_restartPending = false;
+  m_error.clear();
+  paused = false;
+  m_snapshots.clear();
+  m_snapshotEdits.clear();
+  m_savedStatePath = path;
+}
+
+void AppSession::endRun() {
+  finishSteps();
+  if (!m_config.saveState.empty() && m_error.empty())
+    saveStateNow();
+}
+
+void AppSession::takeSnapshot() {
+  const double t = m_sim->time();
+  if (!m_snapshots.empty() && t - m_snapshots.back().first < kSnapshotSpacing)
+    return;
+  m_snapshots.emplace_back(t, sim::encodeState(*m_sim, appState()));
+  m_snapshotEdits.push_back(m_params);
+  while (m_snapshots.size() > kSnapshots) {
+    m_snapshots.pop_front();
+    m_snapshotEdits.pop_front();
+  }
+}
+
+void AppSession::rollBack(const std::string& why) {
+  RecoveryReport& r = m_recovery;
+  const double failedAt = m_sim->time();
+  const bool again = r.dtCap > 0.0;  // still in the last recovery: halve the cap further
+  std::ostringstream s;
+  s << "unstable at t = " << std::fixed << std::setprecision(2) << failedAt << " s (" << why << "): ";
+  if (m_snapshots.empty()) {
+    // nothing good kept (an instability within the first frames): the scene again, as loaded
+    m_params = m_scene.params;
+    const int rollbacks = r.rollbacks;
+    build();
+    m_recovery.rollbacks = rollbacks + 1;
+    m_recovery.failedAt = failedAt;
+    s << "no snapshot left, the scene was reset";
+    m_recovery.message = s.str();
+    return;
+  }
+  // the newest snapshot, dropped from the ring: a second failure goes further back
+  const auto [time, bytes] = std::move(m_snapshots.back());
+  const sim::SimParams edit = m_snapshotEdits.back();
+  m_snapshots.pop_back();
+  m_snapshotEdits.pop_back();
+  restoreAppState(sim::decodeState(bytes, *m_sim));
+  m_params = edit;  // an edit made since (an absurd value) is undone with the state
+  const double base = again ? r.dtCap : m_params.dtMax;
+  r.dtCap = std::max(0.5 * base, m_params.dtMin);
+  r.capUntil = time + 1.0;
+  ++r.rollbacks;
+  r.failedAt = failedAt;
+  r.restoredTo = time;
+  m_sim->params() = m_params;
+  m_sim->params().dtMax = r.dtCap;
+  s << "rolled back to t = " << time << " s, time step cap " << std::setprecision(3) << 1e3 * r.dtCap
+    << " ms for 1 s (rollback " << r.rollbacks << ")";
+  r.message = s.str();
 }
 
 void AppSession::setTrackedHands(
@@ -222,14 +348,34 @@ void AppSession::finishSteps() {
   m_task.wait();
   const auto now = Clock::now();
   const bool ran = m_running;
+  const bool stepped = ran && m_taskSteps > 0;
   m_running = false;
   m_stats.waitMs = 1e3 * seconds(now - waitStart);
   const double frameWall = seconds(now - m_lastFinish);
   m_lastFinish = now;
+  if (m_config.recover && m_taskError.empty() && stepped &&
+      m_sim->lastStep().densityError > kDensityErrorLimit) {
+    std::ostringstream s;
+    s << "mean density error " << 100.0 * m_sim->lastStep().densityError << " % past "
+      << 100.0 * kDensityErrorLimit << " %";
+    m_taskError = s.str();
+  }
   if (!m_taskError.empty()) {
-    m_error = m_taskError;
+    const std::string why = std::move(m_taskError);
     m_taskError.clear();
-    paused = true;
+    if (m_config.recover) {
+      rollBack(why);
+    } else {
+      m_error = why;
+      paused = true;
+    }
+  } else if (stepped) {
+    ++m_framesDone;
+    if (m_config.recover)
+      takeSnapshot();
+    if (!m_config.saveState.empty() && m_config.saveStateEvery > 0 &&
+        m_framesDone % m_config.saveStateEvery == 0)
+      saveStateNow();
   }
   // where the hand is now: the motion's pose at the simulated time reached
   const double t = m_sim->time();
@@ -273,6 +419,14 @@ void AppSession::finishSteps() {
 void AppSession::applyRequests() {
   SessionRequests req = std::move(m_requests);
   m_requests = SessionRequests{};
+  if (req.resetToSavedState && !m_savedStatePath.empty()) {
+    try {
+      loadStateFile(m_savedStatePath);
+      return;
+    } catch (const sim::InputError& e) {
+      m_error = e.what();  // shown by the panel; the running simulation goes on
+    }
+  }
   bool rebuild = req.reset;
   const sim::SceneDesc previousScene = m_scene;
   const std::string previousPath = m_config.scenePath;
@@ -322,6 +476,11 @@ void AppSession::applyRequests() {
       sim::ParamTable::copy(info, m_sim->params(), next);
     }
   }
+  // the recovery's time-step cap for its second, then the edited step again
+  if (m_recovery.dtCap > 0.0 && m_sim->time() >= m_recovery.capUntil)
+    m_recovery.dtCap = 0.0;
+  if (m_recovery.dtCap > 0.0)
+    next.dtMax = std::max(next.dtMin, std::min(next.dtMax, m_recovery.dtCap));
   m_sim->params() = next;
   m_restartPending = pending;
   if (req.singleStep && paused)

@@ -17,6 +17,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "input/hand_driver.h"
@@ -38,6 +39,22 @@ struct SessionConfig {
   double timeScale = 1.0;             ///< simulated seconds per wall second wanted, in (0, 4]
   double handScale = 1.0;             ///< hand size factor (1: adult)
   bool hand = true;                   ///< attach the virtual hand (false: the scene alone)
+  std::string loadState;              ///< saved state restored after the build (--load-state; empty: none)
+  std::string saveState;   ///< state file written by saveStateNow() and every saveStateEvery frames
+  int saveStateEvery = 0;  ///< frames between saves of saveState (0: only at the run's end)
+  /// an instability rolls back to the last good in-memory snapshot (window, headset) instead of pausing
+  /// with error() set (headless: the run reports it and ends)
+  bool recover = false;
+};
+
+/// What the session did about the last instability (the panel shows it).
+struct RecoveryReport {
+  int rollbacks = 0;      ///< rollbacks since the build
+  double failedAt = 0;    ///< simulated time of the instability [s]
+  double restoredTo = 0;  ///< simulated time of the snapshot restored [s] (or 0 after a rebuild)
+  double dtCap = 0;       ///< time-step cap of the recovery [s] (0: none now)
+  double capUntil = 0;    ///< simulated time the cap ends [s]
+  std::string message;    ///< one line: what happened and what was done
 };
 
 /// A time series for the panel's plots: the last `capacity` values.
@@ -79,6 +96,7 @@ struct SessionStats {
 struct SessionRequests {
   bool reset = false;                       ///< rebuild the simulation from the scene
   bool singleStep = false;                  ///< one solver step while paused
+  bool resetToSavedState = false;           ///< restore the saved state (savedStatePath()), else reset
   std::optional<sim::AdaptivityMode> mode;  ///< rebuild in another mode
   std::optional<std::string> scenePath;     ///< load another scene
 };
@@ -134,6 +152,30 @@ class AppSession {
   /// the instability report that paused the run, if any
   const std::string& error() const { return m_error; }
 
+  // ---- saved state (sim/state_io) and recovery ----
+  /// the owner's part of a saved state: hand pose, replay start, frame target
+  std::vector<double> appState() const;
+  /// Writes the state now to `path` (empty: SessionConfig::saveState, else fluidplaying_state.bin); throws
+  /// sim::InputError when it cannot be written. Between frames only.
+  void saveStateNow(const std::string& path = {});
+  /// Restores the state file `path` (built from the same scene, mode, seed and hand size); throws
+  /// sim::StateError (one line naming the file; the session unchanged). Between frames only.
+  void loadStateFile(const std::string& path);
+  /// the state file the panel's "Reset to saved state" restores: the last one loaded or saved (empty: none)
+  const std::string& savedStatePath() const { return m_savedStatePath; }
+  /// what the last rollback did (SessionConfig::recover)
+  const RecoveryReport& recovery() const { return m_recovery; }
+  /// the in-memory snapshots kept for a rollback, oldest first: (simulated time, encoded state)
+  const std::deque<std::pair<double, std::string>>& snapshots() const { return m_snapshots; }
+  /// Called by the app loop when the run ends: writes SessionConfig::saveState when set and the run is
+  /// sound. Throws sim::InputError when it cannot be written.
+  void endRun();
+  /// snapshots kept in memory, and their spacing in simulated time [s]
+  static constexpr std::size_t kSnapshots = 4;
+  static constexpr double kSnapshotSpacing = 0.25;
+  /// the mean density error past which a recovering session treats a step as unstable [-]
+  static constexpr double kDensityErrorLimit = 0.2;
+
   bool paused = false;     ///< no steps (the hand still moves, without velocity)
   double timeScale = 1.0;  ///< simulated seconds per wall second wanted, in (0, 4]
   bool fixedStep = false;  ///< see SessionConfig
@@ -185,6 +227,9 @@ class AppSession {
  private:
   void build();
   void runSteps(double target, double budget, bool oneStep);
+  void restoreAppState(const std::vector<double>& extra);
+  void rollBack(const std::string& why);
+  void takeSnapshot();
 
   SessionConfig m_config;
   sim::SceneDesc m_scene;
@@ -207,6 +252,11 @@ class AppSession {
   bool m_handScalePending = false;
   std::string m_error;
   SessionStats m_stats;
+  std::string m_savedStatePath;
+  RecoveryReport m_recovery;
+  std::deque<std::pair<double, std::string>> m_snapshots;  // oldest first
+  std::deque<sim::SimParams> m_snapshotEdits;              // the edited parameters at each snapshot
+  int m_framesDone = 0;
 
   struct TrackedHand {
     input::HandSide side = input::HandSide::Right;

@@ -111,6 +111,22 @@ struct Declaration {
     line.addSeed([&o](std::uint64_t s) { o.seed = s; })->group(run);
     line.addSet(o.sets)->group(run);
     app.add_flag("--quiet", o.quiet, "no progress lines")->group(run);
+    app.add_option("--load-state", o.loadState,
+                   "start from a state saved by --save-state (same scene, --mode, --seed, --set of non-live "
+                   "parameters and hand size); --frames and --sim-time then count from it")
+        ->type_name("FILE")
+        ->group(run);
+    CLI::Option* save =
+        app.add_option("--save-state", o.saveState,
+                       "write the state at the end of the run (and every --save-state-every frames); the "
+                       "window's panel resets to it")
+            ->type_name("FILE")
+            ->group(run);
+    line.addInteger(
+            "--save-state-every", [&o](long long n) { o.saveStateEvery = int(n); }, 1, 100000000,
+            "with --save-state: also write it every N frames (each time over the last)")
+        ->group(run)
+        ->needs(save);
 
     app.add_option(
            "--hand-script", o.handScript,
@@ -221,8 +237,8 @@ struct Declaration {
                            ->type_name("DIR")
                            ->group(view_));
     app.footer(
-        "Exit codes: 0 ok, 2 bad command line, 3 bad scene, hand script, output or shader, 4 simulation "
-        "unstable.");
+        "Exit codes: 0 ok, 2 bad command line, 3 bad scene, hand script, saved state, output or shader, 4 "
+        "simulation unstable (headless; the window and the headset roll back to a good state instead).");
   }
 };
 

@@ -41,6 +41,9 @@ struct CliOptions {
   std::string exportDir;                ///< --export DIR
   bool quiet = false;                   ///< --quiet: no progress lines
   std::string mode;                     ///< --mode NAME (empty: the scene's mode)
+  std::string loadState;                ///< --load-state FILE: start from a saved state
+  std::string saveState;                ///< --save-state FILE: the state at the end (and every N frames)
+  int saveStateEvery = 0;               ///< --save-state-every N frames (0: only at the end)
   // rendering (headless, through OSMesa)
   bool render = false;                  ///< --render: write a PNG of every frame (implies --headless)
   std::string outDir;                   ///< --out DIR: folder of the PNG files

@@ -1,31 +1,19 @@
 #include "engine/desktop_platform.h"
 
-// gl_api first: it brings GLEW, which must precede any other GL header (GLFW's included)
-#include "render/gl_api.h"
-// clang-format off
-#define GLFW_INCLUDE_NONE
-#include <GLFW/glfw3.h>
-#include <backends/imgui_impl_glfw.h>
-#include <backends/imgui_impl_opengl3.h>
+// gl_api first: it brings GLEW, which must precede any other GL header (ImGui's back-ends included)
 #include <imgui.h>
-// clang-format on
+#include "render/gl_api.h"
 
 #include <algorithm>
 #include <chrono>
-#include <cmath>
-#include <cstdio>
-#include <cstdlib>
-#include <filesystem>
-#include <vector>
 
-#include "engine/headless_render.h"
+#include "engine/frame_capture.h"
+#include "engine/imgui_layer.h"
+#include "engine/key_map.h"
 #include "engine/panel.h"
-#include "render/camera.h"
+#include "engine/view_control.h"
 #include "render/fluid_renderer.h"
-#include "render/image.h"
-#include "render/render_error.h"
 #include "render/shader_program.h"
-#include "render/video_writer.h"
 #include "sim/splash.h"
 
 namespace fp::engine {
@@ -37,266 +25,67 @@ double msSince(Clock::time_point t) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
 }
 
-std::string g_glfwError;  // GLFW reports errors through a plain callback
-
-void glfwError(int code, const char* text) {
-  g_glfwError = std::string(text) + " (" + std::to_string(code) + ")";
-}
-
-input::ViewFrame viewFrameOf(const render::OrbitCamera& camera, double aspect) {
-  input::ViewFrame v;
-  const Eigen::Vector3f eye = camera.eye();
-  v.eye = eye.cast<double>();
-  v.forward = (camera.target - eye).cast<double>().normalized();
-  sim::Vec3d right = v.forward.cross(sim::Vec3d::UnitY());
-  if (right.norm() < 1e-9)
-    right = sim::Vec3d::UnitX();
-  v.right = right.normalized();
-  v.up = v.right.cross(v.forward).normalized();
-  v.fovY = camera.fovY;
-  v.aspect = aspect;
-  return v;
+GlWindowOptions windowOptionsOf(const CliOptions& options) {
+  GlWindowOptions w;
+  w.width = options.sizeGiven ? options.width : 1280;
+  w.height = options.sizeGiven ? options.height : 720;
+  return w;
 }
 }  // namespace
 
 struct DesktopPlatform::Impl {
-  GLFWwindow* window = nullptr;
-  bool imgui = false;
-  std::string description;
+  // declared in construction order: the window (and its context) outlives what draws in it
+  GlWindow window;
   std::unique_ptr<render::FluidRenderer> renderer;
-  render::OrbitCamera camera;
+  std::unique_ptr<ImGuiLayer> imgui;
+  ViewControl view;
   sim::SplashGenerator splash;
   // the state the splash was generated from: a paused simulation keeps its splash, not one a frame
   const sim::Simulation* splashOf = nullptr;
   std::uint64_t splashStep = ~0ull;
   double splashTime = -1.0;
   PanelState panel;
+  FrameCapture frames;
   FrameTiming timing;
   std::optional<Clock::time_point> lastFrame;
-  std::string framedScene;
-  std::uint64_t framedBuild = ~0ull;
   int uiVertices = 0;
-  // input gathered by the callbacks
-  double wheel = 0.0;
-  std::vector<std::pair<int, int>> keys;  // (key, mods) presses
-  double lastX = 0.0, lastY = 0.0;
-  bool fullscreen = false;
-  int windowedPos[2] = {64, 64};
-  int windowedSize[2] = {1280, 720};
-  bool quit = false;
-  input::Gesture gestureBeforeSideButton = input::Gesture::Flat;
-  bool sideButton = false;
-  // screenshots and recording
-  std::string screenshotPath;
-  std::optional<int> frames;
-  std::optional<render::Image> lastImage;
-  bool screenshotWritten = false;
-  std::string recordDir;
-  int recorded = 0;
-  std::unique_ptr<render::VideoWriter> video;  // the record-video toggle (F8)
-  int videoSize[2] = {0, 0};
-  int videos = 0;
-  int screenshots = 0;
 
-  void toggleFullscreen(bool on);
-  void handleKey(AppSession& session, int key);
+  Impl(const CliOptions& options, std::optional<int> frameLimit)
+      : window(windowOptionsOf(options)),
+        renderer(std::make_unique<render::FluidRenderer>(
+            options.shaderDir.empty() ? render::defaultShaderDir() : options.shaderDir)),
+        frames(options, frameLimit, panel) {}
+  ~Impl() {
+    window.makeCurrent();
+    imgui.reset();
+    renderer.reset();  // GL objects go while their context is current
+  }
 };
 
-void DesktopPlatform::Impl::toggleFullscreen(bool on) {
-  if (on == fullscreen)
-    return;
-  GLFWmonitor* monitor = glfwGetPrimaryMonitor();
-  const GLFWvidmode* mode = monitor ? glfwGetVideoMode(monitor) : nullptr;
-  if (on && mode) {
-    glfwGetWindowPos(window, &windowedPos[0], &windowedPos[1]);
-    glfwGetWindowSize(window, &windowedSize[0], &windowedSize[1]);
-    glfwSetWindowMonitor(window, monitor, 0, 0, mode->width, mode->height, mode->refreshRate);
-    fullscreen = true;
-  } else if (!on) {
-    glfwSetWindowMonitor(window, nullptr, windowedPos[0], windowedPos[1], windowedSize[0], windowedSize[1],
-                         0);
-    fullscreen = false;
-  }
-  panel.fullscreen = fullscreen;
-}
-
-void DesktopPlatform::Impl::handleKey(AppSession& session, int key) {
-  render::RenderSettings& s = renderer->settings();
-  input::MouseHand& hand = session.mouseHand();
-  switch (key) {
-    case GLFW_KEY_SPACE:
-      session.paused = !session.paused;
-      break;
-    case GLFW_KEY_N:
-      session.paused = true;
-      session.requests().singleStep = true;
-      break;
-    case GLFW_KEY_R:
-      session.requests().reset = true;
-      break;
-    case GLFW_KEY_EQUAL:
-    case GLFW_KEY_KP_ADD:
-      session.timeScale = std::min(4.0, session.timeScale * 1.25);
-      break;
-    case GLFW_KEY_MINUS:
-    case GLFW_KEY_KP_SUBTRACT:
-      session.timeScale = std::max(0.05, session.timeScale / 1.25);
-      break;
-    case GLFW_KEY_1:
-      hand.gesture().setTarget(input::Gesture::Flat);
-      break;
-    case GLFW_KEY_2:
-      hand.gesture().setTarget(input::Gesture::Fist);
-      break;
-    case GLFW_KEY_3:
-      hand.gesture().setTarget(input::Gesture::Point);
-      break;
-    case GLFW_KEY_G:
-      hand.gesture().setTarget(input::Gesture((int(hand.gesture().target()) + 1) % 3));
-      break;
-    case GLFW_KEY_Q:
-    case GLFW_KEY_E:
-      hand.yawOffset =
-          std::clamp(hand.yawOffset + (key == GLFW_KEY_Q ? 1.0 : -1.0) * M_PI / 12.0, -M_PI / 2, M_PI / 2);
-      break;
-    case GLFW_KEY_V:
-      s.view = s.view == render::RenderSettings::View::Fluid ? render::RenderSettings::View::Particles
-                                                             : render::RenderSettings::View::Fluid;
-      break;
-    case GLFW_KEY_F5:
-      panel.message = session.toggleRecording(panel.recordingPath);
-      break;
-    case GLFW_KEY_F6:
-      if (std::string message = session.toggleReplay(panel.recordingPath); !message.empty())
-        panel.message = std::move(message);
-      break;
-    case GLFW_KEY_F8:
-      panel.recordVideo = !panel.recordVideo;
-      break;
-    case GLFW_KEY_F9:
-      panel.recordFrames = !panel.recordFrames;
-      break;
-    case GLFW_KEY_F11:
-      panel.fullscreen = !panel.fullscreen;
-      break;
-    case GLFW_KEY_F12:
-      panel.screenshot = true;
-      break;
-    case GLFW_KEY_TAB:
-      panel.visible = !panel.visible;
-      break;
-    case GLFW_KEY_F1:
-    case GLFW_KEY_H:
-      panel.help = !panel.help;
-      break;
-    case GLFW_KEY_ESCAPE:
-      panel.help = false;
-      break;
-    default:
-      break;
-  }
-}
-
 DesktopPlatform::DesktopPlatform(const CliOptions& options, std::optional<int> frames)
-    : m(std::make_unique<Impl>()) {
-  const char* display = std::getenv("DISPLAY");
-  const char* wayland = std::getenv("WAYLAND_DISPLAY");
-  if ((!display || !*display) && (!wayland || !*wayland))
-    throw WindowUnavailable("no display (DISPLAY is unset)");
-  glfwSetErrorCallback(glfwError);
-  if (!glfwInit())
-    throw WindowUnavailable("cannot open the display '" + std::string(display ? display : "") +
-                            "': " + g_glfwError);
-  m->windowedSize[0] = options.sizeGiven ? options.width : 1280;
-  m->windowedSize[1] = options.sizeGiven ? options.height : 720;
-  // 4.5 core first, as the renderer asks everywhere; Xvfb's llvmpipe and older drivers may only give 3.3
-  for (const auto& [major, minor] : {std::pair{4, 5}, std::pair{3, 3}}) {
-    glfwDefaultWindowHints();
-    glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, major);
-    glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, minor);
-    glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
-    glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
-    m->window = glfwCreateWindow(m->windowedSize[0], m->windowedSize[1], "FluidPlaying", nullptr, nullptr);
-    if (m->window)
-      break;
-  }
-  if (!m->window) {
-    glfwTerminate();
-    throw WindowUnavailable("no OpenGL 3.3 core window: " + g_glfwError);
-  }
-  glfwMakeContextCurrent(m->window);
-  glfwSwapInterval(1);
-  try {
-    render::gl::loadFunctions(glfwGetProcAddress);
-    m->description = "GLFW, " + render::gl::versionString();
-    m->renderer = std::make_unique<render::FluidRenderer>(
-        options.shaderDir.empty() ? render::defaultShaderDir() : options.shaderDir);
-  } catch (...) {
-    glfwDestroyWindow(m->window);
-    glfwTerminate();
-    throw;
-  }
+    : m(std::make_unique<Impl>(options, frames)) {
   applyRenderOptions(options, m->renderer->settings());
   m->panel.visible = !options.noPanel;
   m->panel.scenes = availableScenes();
-  m->screenshotPath = options.screenshot;
-  m->frames = frames;
-  m->recordDir = options.recordDir;
-  m->panel.recordFrames = !m->recordDir.empty();
-  if (m->recordDir.empty())
-    m->recordDir = "frames";
-
-  // our callbacks first: ImGui's GLFW back-end chains to them
-  glfwSetWindowUserPointer(m->window, m.get());
-  glfwSetScrollCallback(m->window, [](GLFWwindow* w, double, double dy) {
-    static_cast<Impl*>(glfwGetWindowUserPointer(w))->wheel += dy;
-  });
-  glfwSetKeyCallback(m->window, [](GLFWwindow* w, int key, int, int action, int mods) {
-    if (action == GLFW_PRESS)
-      static_cast<Impl*>(glfwGetWindowUserPointer(w))->keys.emplace_back(key, mods);
-  });
-  IMGUI_CHECKVERSION();
-  ImGui::CreateContext();
-  ImGui::GetIO().IniFilename = nullptr;  // no imgui.ini dropped into the working directory
-  ImGui::StyleColorsDark();
-  ImGui::GetStyle().Alpha = 0.95f;
-  ImGui_ImplGlfw_InitForOpenGL(m->window, true);
-  if (!ImGui_ImplOpenGL3_Init("#version 330 core")) {
-    ImGui_ImplGlfw_Shutdown();
-    ImGui::DestroyContext();
-    glfwDestroyWindow(m->window);
-    glfwTerminate();
-    throw WindowUnavailable("the ImGui OpenGL3 back-end cannot start on this context");
+  m->imgui = std::make_unique<ImGuiLayer>(m->window);
+  if (options.fullscreen) {
+    m->window.setFullscreen(true);
+    m->panel.fullscreen = m->window.fullscreen();
   }
-  m->imgui = true;
-  if (options.fullscreen)
-    m->toggleFullscreen(true);
 }
 
-DesktopPlatform::~DesktopPlatform() {
-  if (!m->window)
-    return;
-  glfwMakeContextCurrent(m->window);
-  if (m->imgui) {
-    ImGui_ImplOpenGL3_Shutdown();
-    ImGui_ImplGlfw_Shutdown();
-    ImGui::DestroyContext();
-  }
-  m->renderer.reset();  // GL objects go while their context is current
-  glfwDestroyWindow(m->window);
-  glfwTerminate();
-}
+DesktopPlatform::~DesktopPlatform() = default;
 
 bool DesktopPlatform::running() {
-  return !m->quit && !glfwWindowShouldClose(m->window);
+  return !m->panel.quit && !m->window.closeRequested();
 }
 
 void DesktopPlatform::close() {
-  m->quit = true;
+  m->panel.quit = true;
 }
 
 const std::string& DesktopPlatform::contextDescription() const {
-  return m->description;
+  return m->window.description();
 }
 
 const FrameTiming& DesktopPlatform::timing() const {
@@ -322,76 +111,20 @@ FrameClock DesktopPlatform::beginFrame() {
 }
 
 void DesktopPlatform::input(AppSession& session, const FrameClock& clock) {
-  const double wallDt = clock.dt;
   const auto start = Clock::now();
-  glfwPollEvents();
-  ImGui_ImplOpenGL3_NewFrame();
-  ImGui_ImplGlfw_NewFrame();
-  ImGui::NewFrame();
+  m->window.pollEvents();
+  m->imgui->newFrame();
   const ImGuiIO& io = ImGui::GetIO();
-
-  std::vector<std::pair<int, int>> keys;
-  keys.swap(m->keys);
-  for (const auto& [key, mods] : keys) {
-    if (key == GLFW_KEY_Q && (mods & GLFW_MOD_CONTROL))
-      m->quit = true;
-    else if (!io.WantCaptureKeyboard)
-      m->handleKey(session, key);
+  KeyTargets targets{session, m->panel, m->renderer->settings()};
+  for (const auto& [key, mods] : m->window.takeKeyPresses())
+    applyKey(key, mods, targets, io.WantCaptureKeyboard);
+  if (m->panel.fullscreen != m->window.fullscreen()) {
+    m->window.setFullscreen(m->panel.fullscreen);
+    m->panel.fullscreen = m->window.fullscreen();
   }
-  if (m->panel.fullscreen != m->fullscreen)
-    m->toggleFullscreen(m->panel.fullscreen);
-
-  int width = 1, height = 1;
-  glfwGetWindowSize(m->window, &width, &height);
-  double x = 0.0, y = 0.0;
-  glfwGetCursorPos(m->window, &x, &y);
-  const double dx = x - m->lastX, dy = y - m->lastY;
-  m->lastX = x;
-  m->lastY = y;
   // the panel owns the mouse while it is over it (or a drag started on it)
-  const bool mouse = !io.WantCaptureMouse;
-  auto held = [&](int button) { return mouse && glfwGetMouseButton(m->window, button) == GLFW_PRESS; };
-  auto key = [&](int k) { return !io.WantCaptureKeyboard && glfwGetKey(m->window, k) == GLFW_PRESS; };
-  const bool shift = key(GLFW_KEY_LEFT_SHIFT) || key(GLFW_KEY_RIGHT_SHIFT);
-  const bool ctrl = key(GLFW_KEY_LEFT_CONTROL) || key(GLFW_KEY_RIGHT_CONTROL);
-  render::OrbitCamera& cam = m->camera;
-  const bool pan = held(GLFW_MOUSE_BUTTON_MIDDLE) || (shift && held(GLFW_MOUSE_BUTTON_RIGHT));
-  if (pan) {
-    const float scale = 2.0f * cam.distance * std::tan(0.5f * cam.fovY) / float(std::max(height, 1));
-    const input::ViewFrame v = viewFrameOf(cam, double(width) / std::max(height, 1));
-    cam.target += (-float(dx) * scale) * v.right.cast<float>() + (float(dy) * scale) * v.up.cast<float>();
-  } else if (held(GLFW_MOUSE_BUTTON_RIGHT)) {
-    cam.yaw -= float(dx) * 0.008f;
-    cam.pitch = std::clamp(cam.pitch + float(dy) * 0.008f, -1.45f, 1.45f);
-  }
-  double wheel = mouse ? m->wheel : 0.0;
-  m->wheel = 0.0;
-  double zoomSteps = ctrl ? wheel : 0.0;
-  if (key(GLFW_KEY_Z))
-    zoomSteps += wallDt * 4.0;
-  if (key(GLFW_KEY_X))
-    zoomSteps -= wallDt * 4.0;
-  cam.distance = std::clamp(cam.distance * std::pow(0.9f, float(zoomSteps)), 0.05f, 50.0f);
-  double depthSteps = ctrl ? 0.0 : -wheel;  // wheel up brings the hand closer, like pulling it towards you
-  input::MouseHand& hand = session.mouseHand();
-  if (key(GLFW_KEY_W))
-    depthSteps += wallDt * 0.4 / hand.depthStep;
-  if (key(GLFW_KEY_S))
-    depthSteps -= wallDt * 0.4 / hand.depthStep;
-  const bool side = held(GLFW_MOUSE_BUTTON_4);
-  if (side && !m->sideButton) {
-    m->gestureBeforeSideButton = hand.gesture().target();
-    hand.gesture().setTarget(input::Gesture::Fist);
-  } else if (!side && m->sideButton) {
-    hand.gesture().setTarget(m->gestureBeforeSideButton);
-  }
-  m->sideButton = side;
-  const bool sweep = held(GLFW_MOUSE_BUTTON_LEFT);
-  if (!session.replaying()) {
-    hand.update(viewFrameOf(cam, double(width) / std::max(height, 1)), x, y, width, height, sweep, depthSteps,
-                wallDt);
-    session.setHandTarget(hand.pose());
-  }
+  m->view.update(m->window, session, m->window.takeWheel(), !io.WantCaptureMouse, !io.WantCaptureKeyboard,
+                 clock.dt);
   m->timing.input = msSince(start);
 
   const auto ui = Clock::now();
@@ -403,14 +136,8 @@ void DesktopPlatform::input(AppSession& session, const FrameClock& clock) {
 void DesktopPlatform::capture(AppSession& session, int frame) {
   const auto start = Clock::now();
   const sim::Simulation& simulation = session.simulation();
-  int fbw = 1, fbh = 1;
-  glfwGetFramebufferSize(m->window, &fbw, &fbh);
-  // frame the scene when it first shows and whenever another scene is loaded
-  if (m->framedScene != session.scenePath()) {
-    const Eigen::AlignedBox3f box = sceneViewBox(simulation);
-    m->camera.frame(box.min(), box.max(), float(fbw) / float(std::max(fbh, 1)));
-    m->framedScene = session.scenePath();
-  }
+  const auto [fbw, fbh] = m->window.framebufferSize();
+  m->view.frameScene(session, float(fbw) / float(std::max(fbh, 1)));
   render::SpraySpan spray;
   if (m->renderer->settings().showSpray) {
     if (m->splashOf != &simulation || m->splashStep != simulation.stepCount() ||
@@ -429,96 +156,33 @@ void DesktopPlatform::capture(AppSession& session, int frame) {
 
 void DesktopPlatform::draw(AppSession& session, int frame) {
   auto start = Clock::now();
-  int fbw = 1, fbh = 1;
-  glfwGetFramebufferSize(m->window, &fbw, &fbh);
+  const auto [fbw, fbh] = m->window.framebufferSize();
   if (fbw > 0 && fbh > 0) {
     render::RenderTarget target;
     target.width = fbw;
     target.height = fbh;
     const float aspect = float(fbw) / float(fbh);
-    // one view today; a headset renders each eye through the same call
-    m->renderer->renderView(m->camera.view(), m->camera.projection(aspect), target);
+    m->renderer->renderView(m->view.camera().view(), m->view.camera().projection(aspect), target);
   }
   glFinish();  // so the render time is the GPU's (llvmpipe's) work, not just the command submission
   m->timing.render = msSince(start);
 
   start = Clock::now();
-  std::error_code ec;
-  if (m->panel.recordFrames && fbw > 0) {
-    std::filesystem::create_directories(m->recordDir, ec);
-    char name[32];
-    std::snprintf(name, sizeof(name), "frame_%05d.png", m->recorded++);
-    render::writePng((std::filesystem::path(m->recordDir) / name).string(),
-                     render::readFramebuffer(0, 0, 0, fbw, fbh));
-  }
-  if (m->panel.recordVideo && fbw > 0) {
-    try {
-      if (m->video && (m->video->framesWritten() > 0 && (fbw != m->videoSize[0] || fbh != m->videoSize[1])))
-        m->video.reset();  // a resized window starts a new file
-      if (!m->video) {
-        char name[32];
-        std::snprintf(name, sizeof(name), "video_%03d.mp4", m->videos++);
-        m->video =
-            std::make_unique<render::VideoWriter>(name, fbw, fbh, session.simulation().scene().frameRate);
-        m->videoSize[0] = fbw;
-        m->videoSize[1] = fbh;
-        m->panel.message = std::string("recording video to ") + name + " (F8 stops)";
-      }
-      m->video->write(render::readFramebuffer(0, 0, 0, fbw, fbh));
-    } catch (const render::RenderError& e) {
-      m->panel.message = e.what();
-      m->panel.recordVideo = false;
-      m->video.reset();
-    }
-  } else if (m->video) {
-    const std::string written = m->video->path();
-    try {
-      m->video->close();
-      m->panel.message = "video written to " + written;
-    } catch (const render::RenderError& e) {
-      m->panel.message = e.what();
-    }
-    m->video.reset();
-  }
+  m->frames.sceneDrawn(m->panel, fbw, fbh, session.simulation().scene().frameRate);
   const double beforeUi = msSince(start);
   const auto ui = Clock::now();
-  ImGui::Render();
-  ImDrawData* data = ImGui::GetDrawData();
-  m->uiVertices = data ? data->TotalVtxCount : 0;
-  ImGui_ImplOpenGL3_RenderDrawData(data);
+  m->uiVertices = m->imgui->render();
   glFinish();
   m->timing.ui += msSince(ui);
 
   start = Clock::now();
-  if (m->panel.screenshot && fbw > 0) {
-    m->panel.screenshot = false;
-    char name[40];
-    std::snprintf(name, sizeof(name), "screenshot_%03d.png", m->screenshots++);
-    render::writePng(name, render::readFramebuffer(0, 0, 0, fbw, fbh));
-    m->panel.message = std::string("screenshot written to ") + name;
-  }
-  if (!m->screenshotPath.empty() && fbw > 0) {
-    const bool last = m->frames && frame == *m->frames - 1;
-    if (last || !m->frames) {
-      // without --frames any frame may be the last: keep it, write it when the window closes
-      m->lastImage = render::readFramebuffer(0, 0, 0, fbw, fbh);
-      if (last)
-        finish();
-    }
-  }
-  glfwSwapBuffers(m->window);
+  m->frames.frameDrawn(m->panel, frame, fbw, fbh);
+  m->window.swapBuffers();
   m->timing.present = beforeUi + msSince(start);
 }
 
 void DesktopPlatform::finish() {
-  if (m->screenshotWritten || m->screenshotPath.empty() || !m->lastImage)
-    return;
-  const std::filesystem::path parent = std::filesystem::path(m->screenshotPath).parent_path();
-  std::error_code ec;
-  if (!parent.empty())
-    std::filesystem::create_directories(parent, ec);
-  render::writePng(m->screenshotPath, *m->lastImage);
-  m->screenshotWritten = true;
+  m->frames.finish();
 }
 
 }  // namespace fp::engine

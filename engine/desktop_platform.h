@@ -1,9 +1,9 @@
 #pragma once
-/// The desktop window: a GLFW window with an OpenGL 4.5 core context (3.3 core as fallback), the fluid
-/// renderer drawing one view (renderView, as each VR eye will), the mouse hand, the orbit camera, the ImGui
-/// panel (Dear ImGui 1.86, GLFW and OpenGL3 back-ends), screenshots and frame recording. The canonical ImGui
-/// frame: poll events, new frame, read io.WantCaptureMouse before the app uses the mouse, build, render,
-/// swap.
+/// The desktop platform of the app loop: the window and its context (engine/gl_window), the fluid renderer
+/// drawing one view (renderView, as each VR eye does), the camera and the mouse hand (engine/view_control),
+/// the keys (engine/key_map), the ImGui panel (engine/imgui_layer, engine/panel), and screenshots and frame
+/// recording (engine/frame_capture). This file only wires them into the frame: poll events, new ImGui frame,
+/// keys and mouse (the panel first: io.WantCaptureMouse), capture, draw, panel, present.
 
 #include <memory>
 #include <optional>
@@ -12,14 +12,9 @@
 
 #include "engine/app_loop.h"
 #include "engine/cli.h"
+#include "engine/gl_window.h"
 
 namespace fp::engine {
-
-/// No window can be opened: no display, or no OpenGL 3.3 core context. The message is one line.
-class WindowUnavailable : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
 
 /// Wall time of the parts of the last frame on the main thread [ms].
 struct FrameTiming {

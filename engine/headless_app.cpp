@@ -6,6 +6,7 @@
 #include <iomanip>
 #include <ostream>
 
+#include "input/joint_track.h"
 #include "sim/metrics.h"
 #include "sim/ply_writer.h"
 
@@ -51,7 +52,7 @@ void HeadlessPlatform::capture(AppSession& session, int frame) {
     return;
   }
   // a frame is taken when the steps reached its end (a shorter last frame is not)
-  if (frame == 0 || simulation.time() >= (m_frame + 1) * m_frameDt - 1e-12)
+  if (frame == 0 || simulation.time() >= m_startTime + (m_frame + 1) * m_frameDt - 1e-12)
     takeFrame(simulation);
   if (frame == 0)
     m_start = m_lastReport = Clock::now();
@@ -63,10 +64,12 @@ void HeadlessPlatform::capture(AppSession& session, int frame) {
   if (!m_options.quiet && std::chrono::duration<double>(now - m_lastReport).count() > 2.0) {
     m_lastReport = now;
     const double wall = std::chrono::duration<double>(now - m_start).count();
-    const double eta = wall / simulation.time() * (m_endTime - simulation.time());
-    m_progress << std::fixed << std::setprecision(3) << "  t = " << simulation.time() << " / " << m_endTime
-               << " s, step " << simulation.stepCount() << ", " << simulation.particles().size()
-               << " particles, wall " << std::setprecision(1) << wall << " s, eta " << eta << " s\n"
+    const double done = simulation.time() - m_startTime;
+    const double eta = done > 0.0 ? wall / done * (m_endTime - done) : 0.0;
+    m_progress << std::fixed << std::setprecision(3) << "  t = " << simulation.time() << " / "
+               << m_startTime + m_endTime << " s, step " << simulation.stepCount() << ", "
+               << simulation.particles().size() << " particles, wall " << std::setprecision(1) << wall
+               << " s, eta " << eta << " s\n"
                << std::defaultfloat << std::flush;
   }
 }
@@ -101,9 +104,17 @@ SessionConfig sessionConfigOf(const CliOptions& options) {
   c.seed = options.seed;
   c.sets = options.sets;
   c.handScript = options.handScript;
+  if (input::JointTrack::isJointFile(c.handScript)) {
+    c.handScript.clear();  // a joint recording: the tracked hands replay it (engine/tracked_hands.h)
+    c.hand = false;
+  }
   c.fixedStep = options.fixedStep;
   c.timeScale = options.timeScale;
   c.handScale = options.handScale;
+  c.loadState = options.loadState;
+  c.saveState = options.saveState;
+  c.saveStateEvery = options.saveStateEvery;
+  c.recover = !options.headless;  // the window and the headset roll back; a headless run reports and ends
   return c;
 }
 

@@ -30,6 +30,8 @@ class HeadlessPlatform : public AppPlatform {
   void capture(AppSession& session, int frame) override;
   void draw(AppSession&, int) override {}
 
+  /// the run starts at simulated time `t` [s] (a loaded state); frames and `endTime` count from there
+  void setStartTime(double t) { m_startTime = t; }
   /// frames the run completed after the initial state
   int frames() const { return m_frame; }
   /// wall time since the initial state was taken [s]
@@ -41,6 +43,7 @@ class HeadlessPlatform : public AppPlatform {
   const CliOptions& m_options;
   double m_frameDt;
   double m_endTime;
+  double m_startTime = 0.0;
   int m_frameCount;  // frames with steps: the last frame only takes the final state
   RunSummary& m_summary;
   std::ostream& m_progress;

@@ -3,10 +3,12 @@
 #include <tbb/global_control.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <iomanip>
 
 #include "engine/headless_app.h"
+#include "engine/tracked_hands.h"
 
 namespace fp::engine {
 
@@ -42,9 +44,11 @@ RunSummary runHeadless(const CliOptions& options, std::ostream& out, std::ostrea
     if (ec)
       throw sim::InputError(options.exportDir + ": cannot create export directory (" + ec.message() + ")");
   }
+  const std::optional<JointReplay> joints = JointReplay::ofScript(options.handScript);
   SessionConfig config = sessionConfigOf(options);
-  config.fixedStep = true;                    // no wall clock: every frame is 1 / frame_rate
-  config.hand = !options.handScript.empty();  // the scene alone, unless a recorded hand plays in it
+  config.fixedStep = true;                   // no wall clock: every frame is 1 / frame_rate
+  config.hand = !config.handScript.empty();  // the scene alone, unless a recorded hand plays in it
+  config.recover = false;                    // an instability ends the run (exit 4)
   AppSession session(config);
   const sim::SceneDesc& scene = session.scene();
   double simTime = scene.simTime;
@@ -52,7 +56,9 @@ RunSummary runHeadless(const CliOptions& options, std::ostream& out, std::ostrea
     simTime = *options.simTime;
   if (options.frames)
     simTime = double(*options.frames) / scene.frameRate;
-  session.setEndTime(simTime);
+  // a loaded state: the run goes on from its frame, so it ends where the uninterrupted run would
+  const double startTime = std::round(session.simulation().time() * scene.frameRate) / scene.frameRate;
+  session.setEndTime(startTime + simTime);
 
   const sim::Simulation& simulation = session.simulation();
   RunSummary s;
@@ -73,7 +79,9 @@ RunSummary runHeadless(const CliOptions& options, std::ostream& out, std::ostrea
   }
 
   HeadlessPlatform platform(options, scene.frameRate, simTime, s, progress, onFrame);
-  runAppLoop(session, platform, std::nullopt);
+  platform.setStartTime(startTime);
+  JointReplayPlatform replay(platform, joints, session, options.handScale);
+  runAppLoop(session, replay, std::nullopt);
   s.wallSeconds = platform.wallSeconds();
   s.frames = platform.frames();
   const double taken = double(std::max(s.frames, 0) + 1);

@@ -14,6 +14,7 @@
 #include "engine/headless_app.h"
 #include "engine/headless_render.h"
 #include "engine/headless_runner.h"
+#include "engine/tracked_hands.h"
 #include "render/render_error.h"
 #ifdef FP_HAVE_XR
 #include "engine/xr_app.h"
@@ -27,13 +28,15 @@ using namespace fp::engine;
 int runWindow(const CliOptions& options) {
   // the window and its shaders first: a missing shader stops the run before the scene is built
   DesktopPlatform platform(options, options.frames);
+  const std::optional<JointReplay> joints = JointReplay::ofScript(options.handScript);
   AppSession session(sessionConfigOf(options));
+  JointReplayPlatform replay(platform, joints, session, options.handScale);
   if (!options.quiet) {
     std::cout << "window " << platform.contextDescription() << "; scene " << session.scene().name << " ("
               << fp::sim::modeName(session.mode()) << "), " << session.simulation().particles().size()
               << " particles; F1 lists the controls\n";
   }
-  const int frames = runAppLoop(session, platform, options.frames);
+  const int frames = runAppLoop(session, replay, options.frames);
   platform.finish();
   if (!options.quiet) {
     std::cout << "frames " << frames << ", simulated " << session.simulation().time()

@@ -9,7 +9,9 @@
 #include <filesystem>
 #include <utility>
 
+#include "engine/key_map.h"
 #include "engine/presets.h"
+#include "engine/view_control.h"
 
 namespace fp::engine {
 
@@ -138,10 +140,31 @@ void runControls(AppSession& session, PanelState& state) {
   ImGui::SameLine();
   if (ImGui::Button("Reset (R)"))
     session.requests().reset = true;
+  // issue 15: the state to come back to, and the way back
+  ImGui::SameLine();
+  if (ImGui::Button("Save state")) {
+    try {
+      session.saveStateNow();
+      state.message = "state saved to " + session.savedStatePath();
+    } catch (const sim::InputError& e) {
+      state.message = e.what();
+    }
+  }
+  if (!session.savedStatePath().empty()) {
+    ImGui::SameLine();
+    if (ImGui::Button("Reset to saved state"))
+      session.requests().resetToSavedState = true;
+  }
   float scale = float(session.timeScale);
   if (ImGui::SliderFloat("time scale", &scale, 0.05f, 4.0f, "%.2f", ImGuiSliderFlags_Logarithmic))
     session.timeScale = double(scale);
   ImGui::Checkbox("fixed step (1 frame = 1/frame rate)", &session.fixedStep);
+  if (state.headset) {
+    if (ImGui::Button("Recentre the tank (menu button)"))
+      state.recentre = true;
+    if (ImGui::IsItemHovered())
+      ImGui::SetTooltip("moves the tank onto a table half a metre in front of the headset");
+  }
   ImGui::Text("real-time factor %.2f%s", double(session.stats().realTimeFactor.last()),
               session.stats().realTimeFactor.last() < 0.95f * float(session.timeScale) ? " (slowed)" : "");
   if (ImGui::Button("Screenshot (F12)"))
@@ -156,6 +179,8 @@ void runControls(AppSession& session, PanelState& state) {
     ImGui::TextColored(ImVec4(1, 0.4f, 0.3f, 1), "%s (R resets)", session.error().c_str());
   if (session.restartPending())
     ImGui::TextColored(ImVec4(1, 0.8f, 0.3f, 1), "parameters marked * apply on Reset");
+  if (session.recovery().rollbacks > 0)  // issue 15: what the last rollback did
+    ImGui::TextColored(ImVec4(1, 0.8f, 0.3f, 1), "%s", session.recovery().message.c_str());
 }
 
 void handControls(AppSession& session, PanelState& state) {
@@ -180,14 +205,11 @@ void handControls(AppSession& session, PanelState& state) {
   std::snprintf(path, sizeof(path), "%s", state.recordingPath.c_str());
   if (ImGui::InputText("recording", path, sizeof(path)))
     state.recordingPath = path;
-  // the same as F5 and F6 (engine/desktop_platform.cpp)
   if (ImGui::Button(session.recording() ? "Stop and save (F5)" : "Record hand (F5)"))
-    state.message = session.toggleRecording(state.recordingPath);
+    toggleHandRecording(session, state);
   ImGui::SameLine();
-  if (ImGui::Button(session.replaying() ? "Stop replay (F6)" : "Replay file (F6)")) {
-    if (std::string message = session.toggleReplay(state.recordingPath); !message.empty())
-      state.message = std::move(message);
-  }
+  if (ImGui::Button(session.replaying() ? "Stop replay (F6)" : "Replay file (F6)"))
+    toggleHandReplay(session, state);
 }
 
 void renderControls(render::RenderSettings& s, std::string& message) {
@@ -271,7 +293,7 @@ void drawPanel(AppSession& session, PanelState& state, render::RenderSettings& s
   runControls(session, state);
   if (ImGui::CollapsingHeader("statistics", ImGuiTreeNodeFlags_DefaultOpen))
     statistics(session);
-  if (ImGui::CollapsingHeader("hand"))
+  if (!state.headset && ImGui::CollapsingHeader("hand"))
     handControls(session, state);
   std::vector<std::string> groups(std::begin(kGroupOrder), std::end(kGroupOrder));
   for (const sim::ParamInfo& info : sim::ParamTable::sim().entries()) {
@@ -298,25 +320,34 @@ void drawPanel(AppSession& session, PanelState& state, render::RenderSettings& s
 }
 
 const std::vector<std::pair<const char*, const char*>>& controls() {
-  static const std::vector<std::pair<const char*, const char*>> list = {
-      {"left button (hold)", "sweep: the hand follows the cursor in a plane facing the camera"},
-      {"wheel / W, S", "hand away from / towards the camera"},
-      {"1, 2, 3 / G / side button", "flat hand, fist, point / cycle gestures / fist while held"},
-      {"Q, E", "turn the palm left / right"},
-      {"right drag", "orbit the camera"},
-      {"middle drag / Shift + right drag", "pan the camera"},
-      {"Ctrl + wheel / Z, X", "zoom in / out"},
-      {"Space / N", "pause or run / one solver step"},
-      {"R", "reset the scene (applies parameters marked *)"},
-      {"+ / -", "time scale up / down"},
-      {"V", "water or particle view"},
-      {"F5 / F6", "record the hand / replay the recording"},
-      {"F8 / F9 / F12", "record a video (ffmpeg) / frames as PNG / screenshot"},
-      {"F11", "fullscreen"},
-      {"Tab / F1, H", "panel / this help"},
-      {"Esc", "close the help; Ctrl+Q quits"},
-  };
+  static const std::vector<std::pair<const char*, const char*>> list = [] {
+    std::vector<std::pair<const char*, const char*>> rows = ViewControl::controls();
+    for (const KeyBinding& b : keyBindings())
+      rows.emplace_back(b.name, b.help);
+    return rows;
+  }();
   return list;
+}
+
+const std::vector<std::pair<const char*, const char*>>& headsetControls() {
+  static const std::vector<std::pair<const char*, const char*>> list = [] {
+    std::vector<std::pair<const char*, const char*>> rows;
+    for (const KeyBinding& b : keyBindings()) {
+      if (!b.hand)
+        rows.emplace_back(b.name, b.help);
+    }
+    return rows;
+  }();
+  return list;
+}
+
+void toggleHandRecording(AppSession& session, PanelState& state) {
+  state.message = session.toggleRecording(state.recordingPath);
+}
+
+void toggleHandReplay(AppSession& session, PanelState& state) {
+  if (std::string message = session.toggleReplay(state.recordingPath); !message.empty())
+    state.message = std::move(message);
 }
 
 void drawHelp(PanelState& state) {
@@ -328,7 +359,7 @@ void drawHelp(PanelState& state) {
   ImGui::SetNextWindowBgAlpha(0.85f);
   ImGui::Begin("controls", &state.help, ImGuiWindowFlags_AlwaysAutoResize | ImGuiWindowFlags_NoCollapse);
   if (ImGui::BeginTable("keys", 2)) {
-    for (const auto& [key, action] : controls()) {
+    for (const auto& [key, action] : state.headset ? headsetControls() : controls()) {
       ImGui::TableNextRow();
       ImGui::TableNextColumn();
       ImGui::TextUnformatted(key);

@@ -24,15 +24,26 @@ struct PanelState {
   bool recordFrames = false;                         ///< write every frame's view as PNG
   bool recordVideo = false;                          ///< write every frame's view into video_NNN.mp4
   bool fullscreen = false;                           ///< toggled by the button or F11
-  std::vector<std::string> scenes;                   ///< scene files for the selector
+  bool quit = false;                                 ///< Ctrl+Q: the window asks the loop to stop
+  bool headset = false;             ///< the headset mode's mirror: no mouse hand, a Recentre button
+  bool recentre = false;            ///< set by the Recentre button: place the tank in front of the head
+  std::vector<std::string> scenes;  ///< scene files for the selector
 };
 
 /// Draws the panel; edits go to the session's parameters and requests and to the render settings.
 void drawPanel(AppSession& session, PanelState& state, render::RenderSettings& settings);
 /// Draws the help overlay when state.help is set.
 void drawHelp(PanelState& state);
-/// The mouse and keyboard controls: (input, action), as the help overlay and the README list them.
+/// The mouse and keyboard controls: (input, action), as the help overlay and the README list them: the
+/// mouse and held keys of engine/view_control, then the keys of engine/key_map.
 const std::vector<std::pair<const char*, const char*>>& controls();
+/// The keys of the headset mode's mirror window (no mouse hand): the help overlay's rows there.
+const std::vector<std::pair<const char*, const char*>>& headsetControls();
+
+/// Starts or stops (and saves) the hand recording at state.recordingPath (F5 and its button).
+void toggleHandRecording(AppSession& session, PanelState& state);
+/// Starts or stops replaying state.recordingPath (F6 and its button).
+void toggleHandReplay(AppSession& session, PanelState& state);
 
 /// Draws one parameter's widget from its table entry; returns true when the value changed (and was in range).
 bool parameterWidget(sim::SimParams& params, const sim::ParamInfo& info, std::string& message);

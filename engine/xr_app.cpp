@@ -4,90 +4,50 @@
 #include <fstream>
 #include <thread>
 
+#include <chrono>
+#include <memory>
+
 #include "engine/app_loop.h"
 #include "engine/cli_app.h"
+#include "engine/gl_window.h"
 #include "engine/headless_app.h"
+#include "engine/headless_runner.h"
+#include "engine/tracked_hands.h"
+#include "engine/xr_mirror.h"
 #include "engine/xr_program.h"
 #include "input/joint_track.h"
 #include "render/fluid_renderer.h"
 #include "render/gl_api.h"
 #include "render/shader_program.h"
-// GLX and X11 last: their macros (Success, None) clash with Eigen
-#include <GL/glx.h>
-#include <X11/Xlib.h>
 
 namespace fp::engine {
 
 namespace {
+
+/// simulated time within which the first tracked hand sizes the hands' colliders (the session starts over)
+/// [s]
+constexpr double kSizingWindow = 0.5;
 
 volatile std::sig_atomic_t g_interrupted = 0;
 void onInterrupt(int) {
   g_interrupted = 1;
 }
 
-/// A GLX 3.3 core context on a small pbuffer, current on this thread: what the session renders with when
-/// there is no mirror window.
-class GlxContext {
- public:
-  GlxContext() {
-    m_display = XOpenDisplay(nullptr);
-    if (!m_display)
-      throw XrUnavailable("no X display for the OpenXR GL (Xlib) session");
-    const int attributes[] = {GLX_DRAWABLE_TYPE,
-                              GLX_PBUFFER_BIT,
-                              GLX_RENDER_TYPE,
-                              GLX_RGBA_BIT,
-                              GLX_RED_SIZE,
-                              8,
-                              GLX_GREEN_SIZE,
-                              8,
-                              GLX_BLUE_SIZE,
-                              8,
-                              GLX_DEPTH_SIZE,
-                              24,
-                              None};
-    int count = 0;
-    GLXFBConfig* configs = glXChooseFBConfig(m_display, DefaultScreen(m_display), attributes, &count);
-    if (!configs || count == 0)
-      throw XrUnavailable("no GLX framebuffer configuration");
-    m_config = configs[0];
-    XFree(configs);
-    using CreateContext = GLXContext (*)(Display*, GLXFBConfig, GLXContext, Bool, const int*);
-    const auto create =
-        reinterpret_cast<CreateContext>(render::gl::glxProcAddress("glXCreateContextAttribsARB"));
-    for (int minor : {5, 3}) {
-      const int ca[] = {GLX_CONTEXT_MAJOR_VERSION_ARB,
-                        minor == 5 ? 4 : 3,
-                        GLX_CONTEXT_MINOR_VERSION_ARB,
-                        minor,
-                        GLX_CONTEXT_PROFILE_MASK_ARB,
-                        GLX_CONTEXT_CORE_PROFILE_BIT_ARB,
-                        None};
-      if (!m_context && create)
-        m_context = create(m_display, m_config, nullptr, True, ca);
-    }
-    const int pb[] = {GLX_PBUFFER_WIDTH, 16, GLX_PBUFFER_HEIGHT, 16, None};
-    m_pbuffer = glXCreatePbuffer(m_display, m_config, pb);
-    if (!m_context || !m_pbuffer || !glXMakeContextCurrent(m_display, m_pbuffer, m_pbuffer, m_context))
-      throw XrUnavailable("no GLX OpenGL 3.3 core context for the OpenXR session");
-    render::gl::loadFunctions(&render::gl::glxProcAddress);
+/// The context the session renders in: the mirror window's (a display and no --no-window), else a hidden
+/// window's. No display: the headset mode cannot run (XrUnavailable).
+std::unique_ptr<GlWindow> openContext(const CliOptions& options, bool visible) {
+  GlWindowOptions w;
+  w.width = options.sizeGiven ? options.width : 960;
+  w.height = options.sizeGiven ? options.height : 540;
+  w.visible = visible;
+  w.title = "FluidPlaying (headset mirror)";
+  w.swapInterval = 0;  // xrWaitFrame paces the frames, never the desktop display
+  try {
+    return std::make_unique<GlWindow>(w);
+  } catch (const WindowUnavailable& e) {
+    throw XrUnavailable(std::string("no X display for the OpenXR GL (Xlib) session: ") + e.what());
   }
-  ~GlxContext() {
-    glXMakeContextCurrent(m_display, None, None, nullptr);
-    if (m_context)
-      glXDestroyContext(m_display, m_context);
-    if (m_pbuffer)
-      glXDestroyPbuffer(m_display, m_pbuffer);
-    XCloseDisplay(m_display);
-  }
-  GlxBinding binding() const { return {m_display, m_config, m_pbuffer, m_context}; }
-
- private:
-  Display* m_display = nullptr;
-  GLXFBConfig m_config = nullptr;
-  GLXPbuffer m_pbuffer = 0;
-  GLXContext m_context = nullptr;
-};
+}
 
 /// Scene <-> reference space: the tank's floor centre on a table 0.5 m in front of the head, facing it.
 struct TankPlacement {
@@ -121,10 +81,11 @@ struct TankPlacement {
 
 class XrPlatform : public AppPlatform {
  public:
-  XrPlatform(const CliOptions& options, XrProgram& xr, GlxContext& gl)
+  XrPlatform(const CliOptions& options, XrProgram& xr, GlWindow& gl, XrMirror* mirror)
       : m_options(options),
         m_xr(xr),
         m_gl(gl),
+        m_mirror(mirror),
         m_renderer(options.shaderDir.empty() ? render::defaultShaderDir() : options.shaderDir) {
     m_renderer.settings().showSpray = false;
   }
@@ -132,16 +93,14 @@ class XrPlatform : public AppPlatform {
   bool running() override { return !m_exit; }
 
   FrameClock beginFrame() override {
-    if (g_interrupted && !m_exitRequested) {
-      m_xr.requestExit();
-      m_exitRequested = true;
-    }
     m_frameActive = false;
     FrameClock idle;
     idle.simulate = false;
     idle.render = false;
+    if (wantsExit())
+      return idle;
     const XrLifecycle l = m_xr.pollEvents();
-    if (l == XrLifecycle::Exit) {
+    if (l == XrLifecycle::Exit || (l == XrLifecycle::Recreate && m_exitRequested)) {
       m_exit = true;
       return idle;
     }
@@ -150,7 +109,9 @@ class XrPlatform : public AppPlatform {
       return idle;
     }
     if (l == XrLifecycle::Idle) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(5));  // nothing to show: do not spin
+      // nothing to show in the headset: do not spin; the mirror still shows its last image and the panel
+      std::this_thread::sleep_for(std::chrono::milliseconds(m_mirror ? 10 : 5));
+      idle.render = m_mirror != nullptr;
       return idle;
     }
     // xrWaitFrame: the frame's time is the predicted display period; the last frame's steps run meanwhile
@@ -164,11 +125,15 @@ class XrPlatform : public AppPlatform {
   }
 
   void restart(AppSession&) override {
-    m_xr.createSession(m_gl.binding());
+    m_xr.createSession(m_gl.glxBinding());
     ++m_recreated;
   }
 
-  void input(AppSession& session, const FrameClock&) override {
+  void input(AppSession& session, const FrameClock& clock) override {
+    if (m_mirror && clock.render) {
+      m_mirror->input(session, m_renderer.settings());
+      m_recentre = m_mirror->takeRecentre() || m_recentre;
+    }
     if (!m_frameActive)
       return;
     if (!m_placed) {
@@ -177,24 +142,36 @@ class XrPlatform : public AppPlatform {
       m_placed = true;
     }
     const XrHands hands = m_xr.locateHands();
-    if (hands.recentre) {
+    if (hands.recentre || m_recentre) {
       const auto [head, turn] = m_xr.headPose();
       m_placement.place(head, turn, m_xr.stageSpace());
+      m_recentre = false;
     }
-    input::JointFrame record;
-    record.time = m_recordTime;
-    for (std::size_t k = 0; k < session.trackedHandCount() && k < 2; ++k) {
-      std::optional<std::array<input::PartPose, input::HandModel::kParts>> parts;
-      if (hands.joints[k]) {
-        const input::HandJoints scene = m_placement.toScene(*hands.joints[k]);
-        parts = input::partPosesFromJoints(scene);
-        record.hands[k] = scene;
+    TrackedJoints joints;
+    for (std::size_t k = 0; k < joints.size(); ++k) {
+      if (hands.joints[k])
+        joints[k] = m_placement.toScene(*hands.joints[k]);
+    }
+    if (!m_sized) {
+      // the hands' colliders take the tracked hands' sizes from the first frame one is seen in, while the
+      // water has barely started (the session starts over)
+      const bool tracked = joints[0] || joints[1];
+      if (tracked && !hands.fromControllers)
+        attachTrackedHands(session, joints, m_options.handScale);
+      m_sized = tracked || session.simulation().time() > kSizingWindow;
+    }
+    // the hands ease in simulated time: a fixed-step frame is one frame of the scene
+    setTrackedTargets(session, joints, session.fixedStep ? 1.0 / session.scene().frameRate : m_timing.period);
+    if (!m_options.recordHands.empty()) {
+      // at the simulated time of the frame, where a replay (engine/tracked_hands.h) looks for it
+      input::JointFrame record;
+      record.time = session.simulation().time();
+      for (std::size_t k = 0; k < joints.size(); ++k) {
+        if (joints[k])
+          record.hands[k] = *joints[k];
       }
-      session.setTrackedHandTarget(k, parts, m_timing.period);
+      m_recording.put(record);
     }
-    if (!m_options.recordHands.empty())
-      m_recording.add(record);
-    m_recordTime += m_timing.period;
   }
 
   void capture(AppSession& session, int) override {
@@ -202,25 +179,29 @@ class XrPlatform : public AppPlatform {
       m_renderer.update(render::frameDataOf(session.simulation()));
   }
 
-  void draw(AppSession&, int) override {
-    if (!m_frameActive)
-      return;
-    const float nearZ = 0.05f, farZ = 50.0f;
-    if (m_timing.shouldRender) {
-      const auto eyes = m_xr.locateEyes();
-      const render::Mat4 model = m_placement.sceneToSpace();
-      for (int eye = 0; eye < 2; ++eye) {
-        render::RenderTarget target;
-        target.framebuffer = m_xr.acquireEye(eye);
-        target.width = eyes[eye].width;
-        target.height = eyes[eye].height;
-        m_renderer.renderView(eyes[eye].view * model, render::offAxisPerspective(eyes[eye].fov, nearZ, farZ),
-                              target);
-        m_xr.releaseEye(eye);
+  void draw(AppSession& session, int frame) override {
+    if (m_frameActive) {
+      const float nearZ = 0.05f, farZ = 50.0f;
+      if (m_timing.shouldRender) {
+        const auto eyes = m_xr.locateEyes();
+        const render::Mat4 model = m_placement.sceneToSpace();
+        for (int eye = 0; eye < 2; ++eye) {
+          render::RenderTarget target;
+          target.framebuffer = m_xr.acquireEye(eye);
+          target.width = eyes[eye].width;
+          target.height = eyes[eye].height;
+          m_renderer.renderView(eyes[eye].view * model,
+                                render::offAxisPerspective(eyes[eye].fov, nearZ, farZ), target);
+          if (eye == 0 && m_mirror)
+            m_mirror->copyEye(target.framebuffer, target.width, target.height);
+          m_xr.releaseEye(eye);
+        }
       }
+      m_xr.endFrame(m_timing.shouldRender, nearZ, farZ);
+      ++m_submitted;
     }
-    m_xr.endFrame(m_timing.shouldRender, nearZ, farZ);
-    ++m_submitted;
+    if (m_mirror)
+      m_mirror->present(session, frame);
   }
 
   /// the steps must leave the frame's display period to the drawing: most of a period, never more
@@ -229,62 +210,109 @@ class XrPlatform : public AppPlatform {
   void finish() {
     if (!m_options.recordHands.empty())
       m_recording.save(m_options.recordHands);
+    if (m_mirror)
+      m_mirror->finish();
   }
+  /// asks the session to end, as Ctrl+C does (the end of --frames)
+  void requestExit() { m_exitAsked = true; }
   int submitted() const { return m_submitted; }
   int recreated() const { return m_recreated; }
 
   TankPlacement m_placement;
 
  private:
+  /// Ctrl+C or the mirror closed: asks the runtime to end a running session (which the loop then follows
+  /// through STOPPING to EXITING); true when there is no running session to wait for, and the loop stops
+  bool wantsExit() {
+    using Clock = std::chrono::steady_clock;
+    const bool asked = g_interrupted || m_exitAsked || (m_mirror && m_mirror->closeRequested());
+    if (asked && !m_exitRequested) {
+      m_exitRequested = true;
+      m_exitDeadline = Clock::now() + std::chrono::seconds(5);
+      if (!m_xr.sessionRunning()) {
+        m_exit = true;
+        return true;
+      }
+      m_xr.requestExit();
+    }
+    if (m_exitRequested && Clock::now() > m_exitDeadline) {
+      m_exit = true;  // a runtime that never ends the session does not keep the app open
+      return true;
+    }
+    return false;
+  }
+
   const CliOptions& m_options;
   XrProgram& m_xr;
-  GlxContext& m_gl;
+  GlWindow& m_gl;
+  XrMirror* m_mirror;
   render::FluidRenderer m_renderer;
   XrProgram::FrameTiming m_timing;
   bool m_frameActive = false;
   bool m_exit = false;
+  bool m_exitAsked = false;
   bool m_exitRequested = false;
+  std::chrono::steady_clock::time_point m_exitDeadline;
   bool m_placed = false;
+  bool m_recentre = false;
   int m_submitted = 0;
   int m_recreated = 0;
   input::JointTrack m_recording;
-  double m_recordTime = 0.0;
+  bool m_sized = false;
 };
 
 }  // namespace
 
 int runXrApp(const CliOptions& options, std::ostream& out) {
+  // declared first, so it goes last: the program destroys the session's GL objects in its context
+  std::unique_ptr<GlWindow> gl;
+  // the runtime first: without one the desktop fallback opens no window here
   XrProgram xr("fluidplaying");
-  GlxContext gl;
-  xr.createSession(gl.binding());
+  const bool mirrored = !options.noWindow && !options.headless;
+  gl = openContext(options, mirrored);
+  const GlxBinding binding = gl->glxBinding();
+  if (!binding.display)
+    throw XrUnavailable("the window's OpenGL context is not a GLX context (XR_KHR_opengl_enable needs Xlib)");
+  xr.createSession(binding);
   SessionConfig config = sessionConfigOf(options);
   config.hand = false;       // the tracked hands take the mouse hand's place
   AppSession probe(config);  // the scene, for the tank's floor centre and the hands' resting pose
   sim::Aabb water;
   for (const sim::FluidBlock& b : probe.scene().fluid)
     water.extend(b.box);
-  const input::HandModel model(options.handScale);
-  const input::HandPose rest = restingHandPose(probe.scene(), model);
   AppSession& session = probe;
-  session.setTrackedHands(
-      {{input::HandSide::Left, input::jointsOfHandPose(model, rest, input::HandSide::Left)},
-       {input::HandSide::Right, input::jointsOfHandPose(model, rest, input::HandSide::Right)}});
-  session.requests().reset = true;  // rebuild with the tracked hands
-  session.applyRequests();
-  XrPlatform platform(options, xr, gl);
+  attachTrackedHands(session, {}, options.handScale);  // the model hand until a tracked one is seen
+  std::unique_ptr<XrMirror> mirror;
+  if (mirrored)
+    mirror = std::make_unique<XrMirror>(*gl, options, options.frames);
+  XrPlatform platform(options, xr, *gl, mirror.get());
   platform.m_placement.floorCentre =
       water.isEmpty() ? sim::Vec3d::Zero()
                       : sim::Vec3d(water.center().x(), water.min().y(), water.center().z());
   if (!options.quiet) {
     out << "headset " << xr.description() << " (" << xr.recommendedSize()[0] << "x" << xr.recommendedSize()[1]
-        << " per eye, " << (xr.stageSpace() ? "STAGE" : "LOCAL") << " space); scene " << session.scene().name
-        << ", " << session.simulation().particles().size() << " particles\n";
+        << " per eye, " << (xr.stageSpace() ? "STAGE" : "LOCAL") << " space); "
+        << (mirrored ? "mirror window " : "hidden context ") << gl->description() << "; scene "
+        << session.scene().name << ", " << session.simulation().particles().size() << " particles\n";
   }
   g_interrupted = 0;
   auto previous = std::signal(SIGINT, onInterrupt);
   const int frames = runAppLoop(session, platform, options.frames);
+  if (platform.running()) {
+    // --frames reached: the session still ends as the spec says, through STOPPING and EXITING
+    platform.requestExit();
+    runAppLoop(session, platform, std::nullopt);
+  }
   std::signal(SIGINT, previous);
   platform.finish();
+  if (!options.statsPath.empty()) {
+    RunSummary summary;
+    summary.scene = options.scenePath;
+    summary.mode = sim::modeName(session.simulation().mode());
+    summary.frames = frames;
+    fillRunFigures(session.simulation(), summary);
+    writeStatsJson(options.statsPath, summary);
+  }
   if (!options.quiet) {
     out << "frames " << frames << ", submitted " << platform.submitted() << ", sessions recreated "
         << platform.recreated() << ", simulated " << session.simulation().time() << " s\n";

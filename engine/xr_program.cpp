@@ -341,6 +341,10 @@ bool XrProgram::hasSession() const {
   return m->session != XR_NULL_HANDLE;
 }
 
+bool XrProgram::sessionRunning() const {
+  return m->session != XR_NULL_HANDLE && m->running;
+}
+
 bool XrProgram::stageSpace() const {
   return m->stage;
 }

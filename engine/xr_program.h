@@ -11,6 +11,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "engine/gl_window.h"  // GlxBinding: the context the session renders with (the mirror window's)
 #include "input/joint_hand.h"
 #include "render/camera.h"
 
@@ -20,15 +21,6 @@ namespace fp::engine {
 class XrUnavailable : public std::runtime_error {
  public:
   explicit XrUnavailable(const std::string& what) : std::runtime_error(what) {}
-};
-
-/// The GLX context the session renders with (the mirror window's, or a hidden one): Display*, GLXFBConfig,
-/// GLXDrawable and GLXContext as opaque values, so this header needs no X11 or GLX header.
-struct GlxBinding {
-  void* display = nullptr;
-  void* fbConfig = nullptr;
-  unsigned long drawable = 0;
-  void* context = nullptr;
 };
 
 /// One eye of a frame.
@@ -79,6 +71,8 @@ class XrProgram {
   void createSession(const GlxBinding& binding);
   /// true while a session exists
   bool hasSession() const;
+  /// true between xrBeginSession and xrEndSession (the session may be asked to exit)
+  bool sessionRunning() const;
   /// the reference space is STAGE (false: LOCAL)
   bool stageSpace() const;
   /// Polls the runtime's events and follows the lifecycle: begins the session on READY, ends it on STOPPING,

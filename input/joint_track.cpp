@@ -1,57 +1,23 @@
 #include "input/joint_track.h"
 
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <fstream>
 #include <string_view>
-#include <system_error>
+
+#include "input/csv_text.h"
 
 namespace fp::input {
 
 namespace {
 
+using csv::formatExact;
+using csv::parseDouble;
+using csv::splitCommas;
+using csv::trim;
+
 constexpr const char* kHeader = "time,hand,joint,valid,px,py,pz,qw,qx,qy,qz,radius";
 constexpr int kColumns = 12;
-
-std::string formatExact(double value) {
-  char buffer[64];
-  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
-  return std::string(buffer, result.ptr);
-}
-
-std::string_view trim(std::string_view s) {
-  const auto isSpace = [](char c) { return c == ' ' || c == '\t' || c == '\r'; };
-  while (!s.empty() && isSpace(s.front()))
-    s.remove_prefix(1);
-  while (!s.empty() && isSpace(s.back()))
-    s.remove_suffix(1);
-  return s;
-}
-
-bool parseDouble(std::string_view field, double& value) {
-  field = trim(field);
-  if (!field.empty() && field.front() == '+')
-    field.remove_prefix(1);
-  if (field.empty())
-    return false;
-  const auto result = std::from_chars(field.data(), field.data() + field.size(), value);
-  return result.ec == std::errc() && result.ptr == field.data() + field.size();
-}
-
-std::vector<std::string_view> splitCommas(std::string_view line) {
-  std::vector<std::string_view> fields;
-  size_t start = 0;
-  while (true) {
-    const size_t comma = line.find(',', start);
-    if (comma == std::string_view::npos) {
-      fields.push_back(trim(line.substr(start)));
-      return fields;
-    }
-    fields.push_back(trim(line.substr(start, comma - start)));
-    start = comma + 1;
-  }
-}
 
 }  // namespace
 
@@ -108,6 +74,8 @@ JointFrame JointTrack::sample(double t) const {
                                       [](double value, const JointFrame& f) { return value < f.time; });
   const JointFrame& f1 = *upper;
   const JointFrame& f0 = *(upper - 1);
+  if (t == f0.time)
+    return f0;  // a recorded instant as recorded, bit for bit (a replay of the run that recorded it)
   const double a = (t - f0.time) / (f1.time - f0.time);
   JointFrame out = f0;
   out.time = t;
@@ -126,10 +94,27 @@ JointFrame JointTrack::sample(double t) const {
   return out;
 }
 
+void JointTrack::put(const JointFrame& frame) {
+  if (!m_frames.empty() && frame.time == m_frames.back().time) {
+    const JointFrame previous = m_frames.back();
+    m_frames.pop_back();
+    try {
+      add(frame);
+    } catch (...) {
+      m_frames.push_back(previous);
+      throw;
+    }
+    return;
+  }
+  add(frame);
+}
+
+const char* JointTrack::header() {
+  return kHeader;
+}
+
 bool JointTrack::isJointFile(const std::string& path) {
-  std::ifstream in(path);
-  std::string first;
-  return in && std::getline(in, first) && trim(first) == kHeader;
+  return csv::firstLine(path) == kHeader;
 }
 
 JointTrack JointTrack::load(const std::string& path) {

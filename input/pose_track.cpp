@@ -1,65 +1,24 @@
 #include "input/pose_track.h"
 
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <fstream>
 #include <string_view>
-#include <system_error>
+
+#include "input/csv_text.h"
 
 namespace fp::input {
 
 namespace {
 
+using csv::formatExact;
+using csv::parseDouble;
+using csv::splitCommas;
+using csv::trim;
+
 constexpr const char* kHeader = "time,px,py,pz,qw,qx,qy,qz,grip";
 constexpr const char* kHeaderPoint = "time,px,py,pz,qw,qx,qy,qz,grip,point";
 constexpr int kMaxColumns = 10;
-
-/// Shortest decimal text that parses back to exactly `value`, independent of the C locale (unlike printf,
-/// whose decimal separator follows LC_NUMERIC).
-std::string formatExact(double value) {
-  char buffer[64];
-  const auto result = std::to_chars(buffer, buffer + sizeof(buffer), value);
-  return std::string(buffer, result.ptr);
-}
-
-std::string_view trim(std::string_view s) {
-  const auto isSpace = [](char c) { return c == ' ' || c == '\t' || c == '\r'; };
-  while (!s.empty() && isSpace(s.front())) {
-    s.remove_prefix(1);
-  }
-  while (!s.empty() && isSpace(s.back())) {
-    s.remove_suffix(1);
-  }
-  return s;
-}
-
-/// Parses one whole field as a double; from_chars is locale independent and exact, which save() relies on.
-bool parseDouble(std::string_view field, double& value) {
-  field = trim(field);
-  if (!field.empty() && field.front() == '+') {
-    field.remove_prefix(1);  // from_chars rejects an explicit plus sign that spreadsheets sometimes write
-  }
-  if (field.empty()) {
-    return false;
-  }
-  const auto result = std::from_chars(field.data(), field.data() + field.size(), value);
-  return result.ec == std::errc() && result.ptr == field.data() + field.size();
-}
-
-std::vector<std::string_view> splitCommas(std::string_view line) {
-  std::vector<std::string_view> fields;
-  size_t start = 0;
-  while (true) {
-    const size_t comma = line.find(',', start);
-    if (comma == std::string_view::npos) {
-      fields.push_back(line.substr(start));
-      return fields;
-    }
-    fields.push_back(line.substr(start, comma - start));
-    start = comma + 1;
-  }
-}
 
 /// World-frame rotation vector (axis * angle) of the shortest rotation taking q0 to q1.
 sim::Vec3d rotationVector(const sim::Quatd& q0, const sim::Quatd& q1) {
@@ -203,7 +162,7 @@ PoseTrack PoseTrack::load(const std::string& path) {
     for (int c = 0; c < columns; ++c) {
       if (!parseDouble(fields[c], v[c])) {
         throw sim::InputError(where + "column " + std::to_string(c + 1) + ": bad number \"" +
-                              std::string(trim(fields[c])) + "\"");
+                              std::string(fields[c]) + "\"");
       }
     }
     PoseSample key;

@@ -2,60 +2,63 @@
 
 #include <algorithm>
 #include <cmath>
+#include <string>
 
 namespace fp::render {
 
 namespace {
-constexpr ColorField kFields[] = {ColorField::MassLevel, ColorField::Phi,   ColorField::Omega,
-                                  ColorField::Nu,        ColorField::Speed, ColorField::DensityError};
+// One row per colour field: its command-line name and its legend label.
+struct FieldInfo {
+  ColorField field;
+  const char* name;
+  const char* label;
+};
+constexpr FieldInfo kFields[] = {
+    {ColorField::MassLevel, "mass", "mass level m/m_fine"},
+    {ColorField::Phi, "phi", "R_phi (visible level)"},
+    {ColorField::Omega, "omega", "R_omega (vorticity level)"},
+    {ColorField::Nu, "nu", "R_nu (velocity difference level)"},
+    {ColorField::Speed, "speed", "speed [m/s]"},
+    {ColorField::DensityError, "density-error", "density error rho/rho0 - 1"},
+};
+
+const FieldInfo* findField(ColorField field) {
+  for (const FieldInfo& f : kFields) {
+    if (f.field == field)
+      return &f;
+  }
+  return nullptr;
+}
+
+std::string joinedNames() {
+  std::string names;
+  for (const FieldInfo& f : kFields)
+    names += (names.empty() ? "" : ", ") + std::string(f.name);
+  return names;
+}
 }  // namespace
 
 const char* colorFieldName(ColorField field) {
-  switch (field) {
-    case ColorField::MassLevel:
-      return "mass";
-    case ColorField::Phi:
-      return "phi";
-    case ColorField::Omega:
-      return "omega";
-    case ColorField::Nu:
-      return "nu";
-    case ColorField::Speed:
-      return "speed";
-    case ColorField::DensityError:
-      return "density-error";
-  }
-  return "?";
+  const FieldInfo* f = findField(field);
+  return f ? f->name : "?";
 }
 
 std::optional<ColorField> parseColorField(std::string_view name) {
-  for (ColorField f : kFields) {
-    if (name == colorFieldName(f))
-      return f;
+  for (const FieldInfo& f : kFields) {
+    if (name == f.name)
+      return f.field;
   }
   return std::nullopt;
 }
 
 const char* colorFieldNames() {
-  return "mass, phi, omega, nu, speed, density-error";
+  static const std::string names = joinedNames();
+  return names.c_str();
 }
 
 const char* colorFieldLabel(ColorField field) {
-  switch (field) {
-    case ColorField::MassLevel:
-      return "mass level m/m_fine";
-    case ColorField::Phi:
-      return "R_phi (visible level)";
-    case ColorField::Omega:
-      return "R_omega (vorticity level)";
-    case ColorField::Nu:
-      return "R_nu (velocity difference level)";
-    case ColorField::Speed:
-      return "speed [m/s]";
-    case ColorField::DensityError:
-      return "density error rho/rho0 - 1";
-  }
-  return "?";
+  const FieldInfo* f = findField(field);
+  return f ? f->label : "?";
 }
 
 ColorRange defaultColorRange(ColorField field, const sim::SimParams& params) {

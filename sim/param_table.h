@@ -281,31 +281,29 @@ class ParamTableOf {
   }
   /// whether the parameter has the same value in `a` and `b`
   static bool equal(const Entry& e, const S& a, const S& b) {
-    return visit(e, a, [&](const auto& va) {
-      return visit(e, b, [&](const auto& vb) {
-        using A = std::decay_t<decltype(va)>;
-        using B = std::decay_t<decltype(vb)>;
-        if constexpr (std::is_same_v<A, Choice> && std::is_same_v<B, Choice>)
-          return va.index == vb.index;
-        else if constexpr (std::is_same_v<A, B>)
-          return va == vb;
-        else
-          return false;
-      });
-    });
+    // named templates rather than nested generic lambdas: clang 14 (the fuzz build) rejects the latter
+    return visit(
+        e, a, [&](const auto& va) { return visit(e, b, [&](const auto& vb) { return sameValue(va, vb); }); });
   }
   /// Copies the parameter's value from `from` into `to`, unchecked (both hold valid values).
   static void copy(const Entry& e, const S& from, S& to) {
-    visit(e, from, [&](const auto& src) {
-      visit(e, to, [&](auto& dst) {
-        using A = std::decay_t<decltype(src)>;
-        using B = std::decay_t<decltype(dst)>;
-        if constexpr (std::is_same_v<A, Choice> && std::is_same_v<B, Choice>)
-          dst.index = src.index;
-        else if constexpr (std::is_same_v<A, B>)
-          dst = src;
-      });
-    });
+    visit(e, from, [&](const auto& src) { visit(e, to, [&](auto& dst) { copyValue(src, dst); }); });
+  }
+  template <class A, class B>
+  static bool sameValue(const A& va, const B& vb) {
+    if constexpr (std::is_same_v<A, Choice> && std::is_same_v<B, Choice>)
+      return va.index == vb.index;
+    else if constexpr (std::is_same_v<A, B>)
+      return va == vb;
+    else
+      return false;
+  }
+  template <class A, class B>
+  static void copyValue(const A& src, B& dst) {
+    if constexpr (std::is_same_v<A, Choice> && std::is_same_v<B, Choice>)
+      dst.index = src.index;
+    else if constexpr (std::is_same_v<A, B>)
+      dst = src;
   }
   /// whether every parameter of the table has the same value in `a` and `b`
   bool allEqual(const S& a, const S& b) const {

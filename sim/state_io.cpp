@@ -58,6 +58,18 @@ class Writer {
     put(std::uint64_t(values.size()));
     m_bytes.append(reinterpret_cast<const char*>(values.data()), values.size() * sizeof(T));
   }
+  // the field lists' interface (shared with Reader): one call per field, with its name for errors
+  template <class T>
+  void field(const T& value, const char*) {
+    if constexpr (std::is_same_v<T, Vec3d>)
+      putVec(value);
+    else
+      put(value);
+  }
+  template <class T>
+  void array(const std::vector<T>& values, const char*) {
+    putArray(values);
+  }
   std::string& bytes() { return m_bytes; }
 
  private:
@@ -95,6 +107,17 @@ class Reader {
     std::memcpy(static_cast<void*>(values.data()), m_bytes.data() + m_pos, std::size_t(count) * sizeof(T));
     m_pos += std::size_t(count) * sizeof(T);
     return values;
+  }
+  template <class T>
+  void field(T& value, const char* what) {
+    if constexpr (std::is_same_v<T, Vec3d>)
+      value = getVec(what);
+    else
+      value = get<T>(what);
+  }
+  template <class T>
+  void array(std::vector<T>& values, const char* what) {
+    values = getArray<T>(what);
   }
   std::size_t pos() const { return m_pos; }
   std::size_t size() const { return m_bytes.size(); }
@@ -174,28 +197,50 @@ bool isNaN(const std::vector<Real>& values) {
   return false;
 }
 
-void putAdaptivity(Writer& w, const AdaptivityStats& a) {
-  w.put(a.splits);
-  w.put(a.children);
-  w.put(a.merges);
-  w.put(a.redistributions);
-  w.put(a.splitsBlocked);
-  w.put(a.splitsCompared);
-  w.put(a.splitErrorChosen);
-  w.put(a.splitErrorUnrotated);
+// The field lists: each names the fields of a record once, in file order, for the writer and the reader alike
+// (Io is Writer or Reader, R the record, const when written).
+
+template <class Io, class R>
+void adaptivityFields(Io& io, R& a) {
+  const char* what = "run statistics";
+  io.field(a.splits, what);
+  io.field(a.children, what);
+  io.field(a.merges, what);
+  io.field(a.redistributions, what);
+  io.field(a.splitsBlocked, what);
+  io.field(a.splitsCompared, what);
+  io.field(a.splitErrorChosen, what);
+  io.field(a.splitErrorUnrotated, what);
 }
 
-AdaptivityStats getAdaptivity(Reader& r) {
-  AdaptivityStats a;
-  a.splits = r.get<std::uint64_t>("run statistics");
-  a.children = r.get<std::uint64_t>("run statistics");
-  a.merges = r.get<std::uint64_t>("run statistics");
-  a.redistributions = r.get<std::uint64_t>("run statistics");
-  a.splitsBlocked = r.get<std::uint64_t>("run statistics");
-  a.splitsCompared = r.get<std::uint64_t>("run statistics");
-  a.splitErrorChosen = r.get<double>("run statistics");
-  a.splitErrorUnrotated = r.get<double>("run statistics");
-  return a;
+static_assert(sizeof(std::size_t) == 8 && sizeof(int) == 4, "the format stores size_t in 8 bytes, int in 4");
+
+template <class Io, class R>
+void runFields(Io& io, R& run) {
+  const char* what = "run statistics";
+  io.field(run.steps, what);
+  io.field(run.particleSteps, what);
+  io.field(run.particlesMax, what);
+  io.field(run.simTime, what);
+  io.field(run.densityErrorSum, what);
+  io.field(run.densityErrorMax, what);
+  io.field(run.densityIterations, what);
+  io.field(run.divergenceIterations, what);
+  io.field(run.neighborsSum, what);
+  adaptivityFields(io, run.adaptivity);
+}
+
+template <class Io, class R>
+void lastStepFields(Io& io, R& last) {
+  const char* what = "last step";
+  io.field(last.dt, what);
+  io.field(last.densityIterations, what);
+  io.field(last.divergenceIterations, what);
+  io.field(last.densityError, what);
+  io.field(last.solverDensityError, what);
+  io.field(last.fluidNeighbors, what);
+  io.field(last.boundaryNeighbors, what);
+  adaptivityFields(io, last.adaptivity);
 }
 
 }  // namespace
@@ -217,14 +262,57 @@ class StateAccess {
     std::vector<Pose> colliders;
     std::uint32_t nextId = 0;
     ParticleSet fluid;
-    std::vector<Vec3> boundaryX, boundaryV;
-    std::vector<Real> boundaryPsi;
-    std::vector<Vec3d> boundaryLocal;
-    std::vector<std::uint16_t> boundaryCollider;
+    BoundarySet boundary;  // the per-particle arrays only
     RunStats run;
     StepStats last;
     std::vector<double> extra;
   };
+
+  /// every per-particle array of the fluid, in file order: f(member, name)
+  template <class F>
+  static void particleArrays(F&& f) {
+    f(&ParticleSet::x, "positions");
+    f(&ParticleSet::v, "velocities");
+    f(&ParticleSet::a, "accelerations");
+    f(&ParticleSet::m, "masses");
+    f(&ParticleSet::H, "support radii");
+    f(&ParticleSet::rho, "densities");
+    f(&ParticleSet::kappa, "density stiffness");
+    f(&ParticleSet::kappaV, "divergence stiffness");
+    f(&ParticleSet::splitTime, "split times");
+    f(&ParticleSet::id, "ids");
+    f(&ParticleSet::flags, "flags");
+    f(&ParticleSet::levelPhi, "visible levels");
+    f(&ParticleSet::levelOmega, "vorticity levels");
+    f(&ParticleSet::levelNu, "velocity-difference levels");
+    f(&ParticleSet::mOpt, "optimal masses");
+    f(&ParticleSet::phi, "surface distances");
+    f(&ParticleSet::omega, "vorticities");
+    f(&ParticleSet::nu, "velocity differences");
+    f(&ParticleSet::heavySteps, "split delays");
+  }
+  /// every per-particle array of the boundary, in file order: f(member, name)
+  template <class F>
+  static void boundaryArrays(F&& f) {
+    f(&BoundarySet::x, "boundary positions");
+    f(&BoundarySet::v, "boundary velocities");
+    f(&BoundarySet::psi, "boundary volumes");
+    f(&BoundarySet::local, "boundary local positions");
+    f(&BoundarySet::collider, "boundary colliders");
+  }
+  /// a collider's pose (Pose or ColliderState): position, orientation (w, x, y, z), velocities
+  template <class Io, class P>
+  static void poseFields(Io& io, P& p) {
+    const char* what = "a collider pose";
+    io.field(p.position, what);
+    double q[4] = {p.orientation.w(), p.orientation.x(), p.orientation.y(), p.orientation.z()};
+    for (double& c : q)
+      io.field(c, what);
+    if constexpr (!std::is_const_v<P>)
+      p.orientation = Quatd(q[0], q[1], q[2], q[3]);
+    io.field(p.linearVelocity, what);
+    io.field(p.angularVelocity, what);
+  }
 
   static std::string encode(const Simulation& sim, const std::vector<double>& extra) {
     Writer w;
@@ -238,60 +326,13 @@ class StateAccess {
     w.putVec(sim.m_boundaryImpulse);
     w.putArray(paramValues(sim.m_params));
     w.put(std::uint64_t(sim.m_colliders.size()));
-    for (const ColliderState& c : sim.m_colliders) {
-      w.putVec(c.position);
-      for (double q : {c.orientation.w(), c.orientation.x(), c.orientation.y(), c.orientation.z()})
-        w.put(q);
-      w.putVec(c.linearVelocity);
-      w.putVec(c.angularVelocity);
-    }
-    const ParticleSet& f = sim.m_fluid;
-    w.put(f.m_nextId);
-    w.putArray(f.x);
-    w.putArray(f.v);
-    w.putArray(f.a);
-    w.putArray(f.m);
-    w.putArray(f.H);
-    w.putArray(f.rho);
-    w.putArray(f.kappa);
-    w.putArray(f.kappaV);
-    w.putArray(f.splitTime);
-    w.putArray(f.id);
-    w.putArray(f.flags);
-    w.putArray(f.levelPhi);
-    w.putArray(f.levelOmega);
-    w.putArray(f.levelNu);
-    w.putArray(f.mOpt);
-    w.putArray(f.phi);
-    w.putArray(f.omega);
-    w.putArray(f.nu);
-    w.putArray(f.heavySteps);
-    const BoundarySet& b = sim.m_boundary;
-    w.putArray(b.x);
-    w.putArray(b.v);
-    w.putArray(b.psi);
-    w.putArray(b.local);
-    w.putArray(b.collider);
-    const RunStats& run = sim.m_run;
-    w.put(run.steps);
-    w.put(run.particleSteps);
-    w.put(std::uint64_t(run.particlesMax));
-    w.put(run.simTime);
-    w.put(run.densityErrorSum);
-    w.put(run.densityErrorMax);
-    w.put(run.densityIterations);
-    w.put(run.divergenceIterations);
-    w.put(run.neighborsSum);
-    putAdaptivity(w, run.adaptivity);
-    const StepStats& last = sim.m_last;
-    w.put(last.dt);
-    w.put(std::int32_t(last.densityIterations));
-    w.put(std::int32_t(last.divergenceIterations));
-    w.put(last.densityError);
-    w.put(last.solverDensityError);
-    w.put(last.fluidNeighbors);
-    w.put(last.boundaryNeighbors);
-    putAdaptivity(w, last.adaptivity);
+    for (const ColliderState& c : sim.m_colliders)
+      poseFields(w, c);
+    w.put(sim.m_fluid.m_nextId);
+    particleArrays([&](auto member, const char* what) { w.array(sim.m_fluid.*member, what); });
+    boundaryArrays([&](auto member, const char* what) { w.array(sim.m_boundary.*member, what); });
+    runFields(w, sim.m_run);
+    lastStepFields(w, sim.m_last);
     w.putArray(extra);
     const std::uint64_t sum = fnv1a(w.bytes().data(), w.bytes().size());
     w.put(sum);
@@ -377,12 +418,7 @@ class StateAccess {
                        std::to_string(sim.m_colliders.size()));
     for (std::size_t c = 0; c < sim.m_colliders.size(); ++c) {
       Pose p;
-      p.position = r.getVec("a collider pose");
-      const double qw = r.get<double>("a collider pose"), qx = r.get<double>("a collider pose");
-      const double qy = r.get<double>("a collider pose"), qz = r.get<double>("a collider pose");
-      p.orientation = Quatd(qw, qx, qy, qz);
-      p.linearVelocity = r.getVec("a collider pose");
-      p.angularVelocity = r.getVec("a collider pose");
+      poseFields(r, p);
       if (!p.position.allFinite() || !p.orientation.coeffs().allFinite() || !p.linearVelocity.allFinite() ||
           !p.angularVelocity.allFinite() || std::abs(p.orientation.norm() - 1.0) > 1e-6) {
         throw StateError("corrupt: collider " + std::to_string(c) + " has a bad pose");
@@ -392,33 +428,12 @@ class StateAccess {
 
     ParticleSet& f = s.fluid;
     s.nextId = r.get<std::uint32_t>("the particle ids");
-    f.x = r.getArray<Vec3>("positions");
-    f.v = r.getArray<Vec3>("velocities");
-    f.a = r.getArray<Vec3>("accelerations");
-    f.m = r.getArray<Real>("masses");
-    f.H = r.getArray<Real>("support radii");
-    f.rho = r.getArray<Real>("densities");
-    f.kappa = r.getArray<Real>("density stiffness");
-    f.kappaV = r.getArray<Real>("divergence stiffness");
-    f.splitTime = r.getArray<Real>("split times");
-    f.id = r.getArray<std::uint32_t>("ids");
-    f.flags = r.getArray<std::uint32_t>("flags");
-    f.levelPhi = r.getArray<Real>("visible levels");
-    f.levelOmega = r.getArray<Real>("vorticity levels");
-    f.levelNu = r.getArray<Real>("velocity-difference levels");
-    f.mOpt = r.getArray<Real>("optimal masses");
-    f.phi = r.getArray<Real>("surface distances");
-    f.omega = r.getArray<Real>("vorticities");
-    f.nu = r.getArray<Real>("velocity differences");
-    f.heavySteps = r.getArray<std::uint32_t>("split delays");
+    particleArrays([&](auto member, const char* what) { r.array(f.*member, what); });
     const std::size_t n = f.x.size();
-    for (std::size_t size :
-         {f.v.size(), f.a.size(), f.m.size(), f.H.size(), f.rho.size(), f.kappa.size(), f.kappaV.size(),
-          f.splitTime.size(), f.id.size(), f.flags.size(), f.levelPhi.size(), f.levelOmega.size(),
-          f.levelNu.size(), f.mOpt.size(), f.phi.size(), f.omega.size(), f.nu.size(), f.heavySteps.size()}) {
-      if (size != n)
+    particleArrays([&](auto member, const char*) {
+      if ((f.*member).size() != n)
         throw StateError("corrupt: particle fields of different lengths");
-    }
+    });
     if (n == 0)
       throw StateError("corrupt: no fluid particle");
     const Vec3 lo = sim.m_scene.domain.min().cast<Real>();
@@ -436,50 +451,28 @@ class StateAccess {
       throw StateError("corrupt: a particle field is not finite");
     }
 
-    s.boundaryX = r.getArray<Vec3>("boundary positions");
-    s.boundaryV = r.getArray<Vec3>("boundary velocities");
-    s.boundaryPsi = r.getArray<Real>("boundary volumes");
-    s.boundaryLocal = r.getArray<Vec3d>("boundary local positions");
-    s.boundaryCollider = r.getArray<std::uint16_t>("boundary colliders");
+    BoundarySet& b = s.boundary;
+    boundaryArrays([&](auto member, const char* what) { r.array(b.*member, what); });
     const std::size_t nb = sim.m_boundary.size();
-    if (s.boundaryX.size() != nb || s.boundaryV.size() != nb || s.boundaryPsi.size() != nb ||
-        s.boundaryLocal.size() != nb || s.boundaryCollider.size() != nb) {
-      throw StateError("saved with another number of boundary particles than the scene has");
-    }
-    for (std::uint16_t c : s.boundaryCollider) {
+    boundaryArrays([&](auto member, const char*) {
+      if ((b.*member).size() != nb)
+        throw StateError("saved with another number of boundary particles than the scene has");
+    });
+    for (std::uint16_t c : b.collider) {
       if (c >= sim.m_colliders.size())
         throw StateError("corrupt: a boundary particle names collider " + std::to_string(c));
     }
     // the static particles never move nor reorder: they must be the scene's own
     for (std::size_t i = 0; i < sim.m_boundary.staticCount(); ++i) {
-      if (s.boundaryCollider[i] != sim.m_boundary.collider[i] || s.boundaryX[i] != sim.m_boundary.x[i])
+      if (b.collider[i] != sim.m_boundary.collider[i] || b.x[i] != sim.m_boundary.x[i])
         throw StateError("saved with other static boundaries than the scene has");
     }
-    if (!allFinite(s.boundaryX) || !allFinite(s.boundaryV) || !allFinite(s.boundaryPsi) ||
-        !allFinite(s.boundaryLocal)) {
+    if (!allFinite(b.x) || !allFinite(b.v) || !allFinite(b.psi) || !allFinite(b.local)) {
       throw StateError("corrupt: a boundary field is not finite");
     }
 
-    RunStats& run = s.run;
-    run.steps = r.get<std::uint64_t>("run statistics");
-    run.particleSteps = r.get<std::uint64_t>("run statistics");
-    run.particlesMax = std::size_t(r.get<std::uint64_t>("run statistics"));
-    run.simTime = r.get<double>("run statistics");
-    run.densityErrorSum = r.get<double>("run statistics");
-    run.densityErrorMax = r.get<double>("run statistics");
-    run.densityIterations = r.get<std::uint64_t>("run statistics");
-    run.divergenceIterations = r.get<std::uint64_t>("run statistics");
-    run.neighborsSum = r.get<double>("run statistics");
-    run.adaptivity = getAdaptivity(r);
-    StepStats& last = s.last;
-    last.dt = r.get<double>("last step");
-    last.densityIterations = r.get<std::int32_t>("last step");
-    last.divergenceIterations = r.get<std::int32_t>("last step");
-    last.densityError = r.get<double>("last step");
-    last.solverDensityError = r.get<double>("last step");
-    last.fluidNeighbors = r.get<double>("last step");
-    last.boundaryNeighbors = r.get<double>("last step");
-    last.adaptivity = getAdaptivity(r);
+    runFields(r, s.run);
+    lastStepFields(r, s.last);
     s.extra = r.getArray<double>("the app state");
     r.get<std::uint64_t>("the checksum");
     if (r.pos() != r.size())
@@ -502,12 +495,7 @@ class StateAccess {
     }
     sim.m_fluid = std::move(s.fluid);
     sim.m_fluid.m_nextId = s.nextId;
-    BoundarySet& b = sim.m_boundary;
-    b.x = std::move(s.boundaryX);
-    b.v = std::move(s.boundaryV);
-    b.psi = std::move(s.boundaryPsi);
-    b.local = std::move(s.boundaryLocal);
-    b.collider = std::move(s.boundaryCollider);
+    boundaryArrays([&](auto member, const char*) { sim.m_boundary.*member = std::move(s.boundary.*member); });
     sim.m_run = s.run;
     sim.m_last = s.last;
     // Neighbour lists valid for the restored particles, as after a step (readers such as the splash use

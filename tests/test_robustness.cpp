@@ -10,9 +10,13 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iterator>
 #include <sstream>
 #include <string>
+#include <utility>
+#include <vector>
 
+#include "engine/app_session.h"
 #include "engine/cli.h"
 #include "engine/presets.h"
 #include "engine/scene_loader.h"
@@ -215,6 +219,170 @@ TEST(RobustnessTest, NoGl33FallsBackToHeadlessInOneLine) {
   EXPECT_NE(err.find("OpenGL 3.3"), std::string::npos) << err;
   EXPECT_NE(err.find("running headless"), std::string::npos) << err;
   EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+}
+
+std::string readAll(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+TEST(StateCliTest, SavedAtFrameNLoadedAndContinuedIsBitIdenticalOnOneThread) {
+  // fluidplaying mode (splits, merges, the adaptivity's own fields) on one thread: frames 0-8, saved, then
+  // loaded and run on to frame 16, against the uninterrupted 16 frames; the saved states must be the same
+  // bytes (every particle field, time, counters, parameters, collider poses, app numbers, checksum)
+  const fs::path dir = scratch("state_cli");
+  const std::string common = "--headless --quiet --threads 1 --mode fluidplaying --scene " +
+                             engine::assetPath("assets/scenes/tiny_dam_break.json");
+  std::string err;
+  const std::string half = (dir / "half.state").string(), resumed = (dir / "resumed.state").string(),
+                    whole = (dir / "whole.state").string(), every = (dir / "every.state").string();
+  ASSERT_EQ(runExe(common + " --frames 8 --save-state " + half, err), engine::kExitOk) << err;
+  ASSERT_EQ(runExe(common + " --frames 8 --load-state " + half + " --save-state " + resumed, err),
+            engine::kExitOk)
+      << err;
+  ASSERT_EQ(runExe(common + " --frames 16 --save-state " + whole + " --save-state-every 5", err),
+            engine::kExitOk)
+      << err;
+  const std::string a = readAll(resumed), b = readAll(whole);
+  ASSERT_GT(a.size(), 1000u);
+  EXPECT_TRUE(a == b) << "the resumed run differs from the uninterrupted one";
+  EXPECT_NE(readAll(half), b);
+  // the hand tank with a replayed hand: the hand's pose and the replay's clock are part of the state
+  const std::string hand = "--headless --quiet --threads 1 --mode uniform-low --scene " +
+                           engine::assetPath("assets/scenes/hand_tank.json") + " --hand-script " +
+                           engine::assetPath("assets/hands/push.csv");
+  ASSERT_EQ(runExe(hand + " --frames 3 --save-state " + half, err), engine::kExitOk) << err;
+  ASSERT_EQ(runExe(hand + " --frames 3 --load-state " + half + " --save-state " + resumed, err),
+            engine::kExitOk)
+      << err;
+  ASSERT_EQ(runExe(hand + " --frames 6 --save-state " + whole, err), engine::kExitOk) << err;
+  EXPECT_TRUE(readAll(resumed) == readAll(whole))
+      << "the resumed hand run differs from the uninterrupted one";
+}
+
+TEST(StateCliTest, BadStateFilesAreNamedInOneLineWithExitThree) {
+  const fs::path dir = scratch("state_cli_bad");
+  const std::string tiny =
+      "--headless --quiet --frames 2 --scene " + engine::assetPath("assets/scenes/tiny_dam_break.json");
+  std::string err;
+  const std::string good = (dir / "good.state").string();
+  ASSERT_EQ(runExe(tiny + " --save-state " + good, err), engine::kExitOk) << err;
+  const std::string bytes = readAll(good);
+  const std::string truncated = (dir / "truncated.state").string(),
+                    flipped = (dir / "flipped.state").string(), text = (dir / "text.state").string();
+  writeFile(truncated, bytes.substr(0, bytes.size() / 2));
+  std::string f = bytes;
+  f[f.size() / 3] = char(f[f.size() / 3] ^ 0x40);
+  writeFile(flipped, f);
+  writeFile(text, "not a state\n");
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {tiny + " --load-state " + (dir / "missing.state").string(), "missing.state"},
+      {tiny + " --load-state " + dir.string(), dir.string()},
+      {tiny + " --load-state " + truncated, "truncated.state"},
+      {tiny + " --load-state " + flipped, "flipped.state"},
+      {tiny + " --load-state " + text, "text.state"},
+      // another scene, and the same scene in another mode
+      {"--headless --quiet --frames 2 --scene " + engine::assetPath("assets/scenes/dam_break.json") +
+           " --load-state " + good,
+       "good.state"},
+      {tiny + " --mode uniform-low --load-state " + good, "good.state"},
+      {tiny + " --save-state /dev/full", "/dev/full"},
+  };
+  for (const auto& [args, named] : cases) {
+    EXPECT_EQ(runExe(args, err), engine::kExitInput) << args;
+    EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << args << ": " << err;
+    EXPECT_NE(err.find(named), std::string::npos) << args << ": " << err;
+  }
+  // --save-state-every needs --save-state: a bad command line
+  EXPECT_EQ(runExe(tiny + " --save-state-every 3", err), engine::kExitUsage) << err;
+}
+
+TEST(RecoveryTest, AnAbsurdLiveParameterRollsBackToTheLastSnapshotAndRunsOn) {
+  // the window's session (recover on): an instability restores the newest in-memory snapshot and halves the
+  // time-step cap for a second, instead of pausing with an error; max_speed at its minimum is the absurd
+  // value
+  engine::SessionConfig config;
+  config.scenePath = engine::assetPath("assets/scenes/tiny_dam_break.json");
+  config.mode = "fluidplaying";
+  config.fixedStep = true;
+  config.recover = true;
+  config.hand = false;
+  engine::AppSession session(config);
+  auto frame = [&session] {
+    session.applyRequests();
+    session.startSteps(1.0 / 60.0, 1e9);
+    session.finishSteps();
+  };
+  for (int k = 0; k < 40; ++k)
+    frame();
+  ASSERT_EQ(session.error(), "");
+  ASSERT_GE(session.snapshots().size(), 2u);
+  const std::size_t kept = session.snapshots().size();
+  const auto [snapTime, snapBytes] = session.snapshots().back();
+  const double dtMax = session.simulation().params().dtMax;
+  const double maxSpeed = session.simulation().params().maxSpeed;
+  EXPECT_LT(session.simulation().time() - snapTime, engine::AppSession::kSnapshotSpacing + 1e-9);
+
+  session.editParams().maxSpeed =
+      sim::ParamTable::sim().at("max_speed").min;  // every moving particle is "runaway"
+  frame();
+  EXPECT_EQ(session.error(), "") << "recovered, not paused";
+  EXPECT_FALSE(session.paused);
+  EXPECT_EQ(session.recovery().rollbacks, 1);
+  EXPECT_NE(session.recovery().message.find("rolled back"), std::string::npos) << session.recovery().message;
+  // the state is the snapshot's: every particle field, time and step counter, against the snapshot decoded
+  // into a fresh simulation of the same scene
+  const sim::Simulation& now = session.simulation();
+  sim::Simulation expected(now.scene());
+  sim::decodeState(snapBytes, expected);
+  EXPECT_EQ(now.time(), snapTime);
+  EXPECT_EQ(now.stepCount(), expected.stepCount());
+  ASSERT_EQ(now.particles().size(), expected.particles().size());
+  EXPECT_TRUE(now.particles().x == expected.particles().x);
+  EXPECT_TRUE(now.particles().v == expected.particles().v);
+  EXPECT_TRUE(now.particles().m == expected.particles().m);
+  // the absurd edit is undone with the state, and the step is capped at half for a second
+  EXPECT_EQ(now.params().maxSpeed, maxSpeed);
+  EXPECT_EQ(session.editParams().maxSpeed, maxSpeed);
+  EXPECT_DOUBLE_EQ(now.params().dtMax, 0.5 * dtMax);
+  EXPECT_EQ(session.snapshots().size(), kept - 1) << "the restored snapshot leaves the ring";
+
+  // runs on: no NaN, time advances, the cap ends after its second
+  double maxStep = 0.0;
+  for (int k = 0; k < 70; ++k) {
+    frame();
+    ASSERT_EQ(session.error(), "") << "frame " << k;
+    if (session.simulation().time() < snapTime + 0.95)
+      maxStep = std::max(maxStep, session.simulation().lastStep().dt);
+    for (const sim::Vec3& x : session.simulation().particles().x)
+      ASSERT_TRUE(x.allFinite());
+  }
+  EXPECT_EQ(session.recovery().rollbacks, 1);
+  EXPECT_LE(maxStep, 0.5 * dtMax * (1 + 1e-6));
+  EXPECT_GT(session.simulation().time(), snapTime + 1.1);
+  EXPECT_EQ(session.simulation().params().dtMax, dtMax) << "the cap ends after a second";
+
+  // without snapshots (an instability in the first frame) the scene is reset, still no pause
+  engine::AppSession fresh(config);
+  fresh.editParams().maxSpeed = sim::ParamTable::sim().at("max_speed").min;
+  fresh.applyRequests();
+  fresh.startSteps(1.0 / 60.0, 1e9);
+  fresh.finishSteps();
+  EXPECT_EQ(fresh.error(), "");
+  EXPECT_EQ(fresh.recovery().rollbacks, 1);
+  EXPECT_NE(fresh.recovery().message.find("reset"), std::string::npos) << fresh.recovery().message;
+  EXPECT_EQ(fresh.simulation().time(), 0.0);
+  EXPECT_EQ(fresh.simulation().params().maxSpeed, maxSpeed);
+
+  // a headless session (recover off) still stops with the report
+  config.recover = false;
+  engine::AppSession headless(config);
+  headless.editParams().maxSpeed = sim::ParamTable::sim().at("max_speed").min;
+  headless.applyRequests();
+  headless.startSteps(1.0 / 60.0, 1e9);
+  headless.finishSteps();
+  EXPECT_NE(headless.error().find("max_speed"), std::string::npos) << headless.error();
+  EXPECT_TRUE(headless.paused);
 }
 
 }  // namespace

@@ -38,6 +38,21 @@ struct SyntheticScene {
   }
 };
 
+// Puts an open box container of half size `tank` standing on y = 0 into the scene and frames the scene's
+// bounds on it.
+inline void addBoxTank(SyntheticScene& s, const Eigen::Vector3f& tank) {
+  sim::ColliderState tankState;
+  tankState.desc.name = "tank";
+  tankState.desc.shape = sim::ShapeType::Box;
+  tankState.desc.container = true;
+  tankState.desc.halfExtents = tank.cast<double>();
+  tankState.desc.position = sim::Vec3d(0.0, tank.y(), 0.0);
+  tankState.position = tankState.desc.position;
+  s.colliders.push_back(tankState);
+  s.bounds = Eigen::AlignedBox3f(Eigen::Vector3f(-tank.x(), 0.0f, -tank.z()),
+                                 Eigen::Vector3f(tank.x(), 2.0f * tank.y(), tank.z()));
+}
+
 // A water block [lo, hi] of radius-r particles (spacing 2r, support 4r) in a container of half size `tank`
 // standing on y = 0. Particles left of x = splitX are marked as split at time - 0.1 s; with a `surface`, only
 // particles below surface(x, z) are kept.
@@ -70,16 +85,7 @@ inline SyntheticScene makeBlockScene(const Eigen::Vector3f& lo, const Eigen::Vec
       }
     }
   }
-  sim::ColliderState tankState;
-  tankState.desc.name = "tank";
-  tankState.desc.shape = sim::ShapeType::Box;
-  tankState.desc.container = true;
-  tankState.desc.halfExtents = tank.cast<double>();
-  tankState.desc.position = sim::Vec3d(0.0, tank.y(), 0.0);
-  tankState.position = tankState.desc.position;
-  s.colliders.push_back(tankState);
-  s.bounds = Eigen::AlignedBox3f(Eigen::Vector3f(-tank.x(), 0.0f, -tank.z()),
-                                 Eigen::Vector3f(tank.x(), 2.0f * tank.y(), tank.z()));
+  addBoxTank(s, tank);
   return s;
 }
 

@@ -29,16 +29,7 @@ inline SyntheticScene loadTankState(const std::string& ply, const Eigen::Vector3
     s.particles.splitTime[i] = -1.0f;
   s.params.particleRadius = fineRadius;
   s.params.restDensity = 1000.0;
-  sim::ColliderState tank;
-  tank.desc.name = "tank";
-  tank.desc.shape = sim::ShapeType::Box;
-  tank.desc.container = true;
-  tank.desc.halfExtents = tankHalf.cast<double>();
-  tank.desc.position = sim::Vec3d(0.0, tankHalf.y(), 0.0);
-  tank.position = tank.desc.position;
-  s.colliders.push_back(tank);
-  s.bounds = Eigen::AlignedBox3f(Eigen::Vector3f(-tankHalf.x(), 0.0f, -tankHalf.z()),
-                                 Eigen::Vector3f(tankHalf.x(), 2.0f * tankHalf.y(), tankHalf.z()));
+  addBoxTank(s, tankHalf);
   return s;
 }
 

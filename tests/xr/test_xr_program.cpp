@@ -28,7 +28,7 @@ class XrProgramTest : public ::testing::Test {
   }
   void TearDown() override { EXPECT_EQ(test::validationMessages(m_validation), ""); }
 
-  engine::GlxBinding binding() const { return {m_gl.display, m_gl.config, m_gl.pbuffer, m_gl.context}; }
+  engine::GlxBinding binding() const { return m_gl.binding(); }
 
   /// runs frames until the program exits or `limit` frames; counts recreations
   int run(engine::XrProgram& xr, int limit, int& recreated, std::vector<engine::XrHands>* hands = nullptr) {

@@ -92,7 +92,7 @@ class XrRuntime : public ::testing::Test {
     XrGraphicsBindingOpenGLXlibKHR binding{XR_TYPE_GRAPHICS_BINDING_OPENGL_XLIB_KHR};
     binding.xDisplay = m_gl.display;
     binding.glxFBConfig = m_gl.config;
-    binding.glxDrawable = m_gl.pbuffer;
+    binding.glxDrawable = m_gl.drawable;
     binding.glxContext = m_gl.context;
     XrSessionCreateInfo info{XR_TYPE_SESSION_CREATE_INFO};
     info.next = &binding;
@@ -492,7 +492,7 @@ TEST_F(XrRuntime, SwitchesAndLossPending) {
   XrGraphicsBindingOpenGLXlibKHR binding{XR_TYPE_GRAPHICS_BINDING_OPENGL_XLIB_KHR};
   binding.xDisplay = m_gl.display;
   binding.glxFBConfig = m_gl.config;
-  binding.glxDrawable = m_gl.pbuffer;
+  binding.glxDrawable = m_gl.drawable;
   binding.glxContext = m_gl.context;
   XrSessionCreateInfo info{XR_TYPE_SESSION_CREATE_INFO, &binding, 0, m_system};
   XR_OK(xrCreateSession(m_instance, &info, &m_session));
@@ -561,7 +561,6 @@ TEST_F(XrRuntime, RuntimeGlLookupsSurviveTheRenderersReplacement) {
   // (OSMesa, EGL, GLFW). A runtime in the same process resolves its own GL functions with
   // glXGetProcAddressARB (from its own threads and contexts, where the app's provider cannot answer): those
   // lookups must reach libGL, never the app's provider.
-  m_gl.loadGl = false;
   createInstance();
   createSession();
   if (IsSkipped())

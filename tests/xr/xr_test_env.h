@@ -1,7 +1,11 @@
 #pragma once
 // What every XR test shares: the test runtime selected through XR_RUNTIME_JSON, the Khronos core validation
-// layer on with its messages in a file the test checks, and a GLX context on the X display (Xvfb in CI).
+// layer on with its messages in a file the test checks, and the engine's GL context on the X display (Xvfb in
+// CI).
+#include <memory>
 #include <string>
+
+#include "engine/gl_window.h"
 
 // GLEW before any GL header
 #include "render/gl_api.h"
@@ -19,16 +23,21 @@ std::string validationMessages(const std::string& file);
 /// the value of `key` in the runtime's statistics file (-1 when missing)
 long runtimeStat(const std::string& statsFile, const std::string& key);
 
-/// A GLX 3.3 core context on a small pbuffer, current on this thread; GL loaded through render/gl_api.
+/// The headset mode's GL context for tests: the engine's hidden window (engine/gl_window, as `fluidplaying
+/// --xr --no-window` renders in), current on this thread, GL loaded through render/gl_api, with its GLX
+/// handles.
 struct GlxContext {
   Display* display = nullptr;
   GLXFBConfig config = nullptr;
-  GLXPbuffer pbuffer = 0;
+  GLXDrawable drawable = 0;
   GLXContext context = nullptr;
-  bool loadGl = true;  ///< load render/gl_api's functions from this context once it is current
-  /// false (with `error`) where there is no display or no 3.3 core context
+  /// false (with `error`) where there is no display, no 3.3 core context or no GLX
   bool create(std::string& error);
-  ~GlxContext();
+  /// the handles as engine::XrProgram takes them
+  engine::GlxBinding binding() const { return m_window ? m_window->glxBinding() : engine::GlxBinding{}; }
+
+ private:
+  std::unique_ptr<engine::GlWindow> m_window;
 };
 
 }  // namespace fp::test

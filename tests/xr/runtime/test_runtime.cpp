@@ -102,6 +102,7 @@ struct Config {
   std::string hands = env("FP_XR_HANDS");
   std::string events = env("FP_XR_EVENTS");
   std::string stats = env("FP_XR_STATS");
+  std::string frameLog = env("FP_XR_FRAME_LOG");  // a line per xrEndFrame: display time, end time [ns]
   std::string capture =
       env("FP_XR_CAPTURE");  // "FRAME,DIR": the eyes of frame FRAME as DIR/eye0.ppm, eye1.ppm
   std::string profile = env("FP_XR_PROFILE", "/interaction_profiles/khr/simple_controller");
@@ -188,6 +189,7 @@ struct Object {
 };
 
 struct Instance : Object {
+  static constexpr Kind kKind = Kind::Instance;
   Instance() : Object(Kind::Instance) {}
   bool glExt = false;
   bool handExt = false;
@@ -199,6 +201,7 @@ struct Instance : Object {
 };
 
 struct Session : Object {
+  static constexpr Kind kKind = Kind::Session;
   Session() : Object(Kind::Session) {}
   XrSessionState state = XR_SESSION_STATE_UNKNOWN;  // as the application has seen it
   bool running = false;
@@ -214,9 +217,11 @@ struct Session : Object {
   bool lost[2] = {false, false};
   bool menu = false;
   std::vector<std::uint64_t> swapchains;
+  XrTime waitCalled = 0, waitReturned = 0;  // the last xrWaitFrame [runtime clock]
 };
 
 struct Space : Object {
+  static constexpr Kind kKind = Kind::Space;
   Space() : Object(Kind::Space) {}
   XrReferenceSpaceType type = XR_REFERENCE_SPACE_TYPE_VIEW;
   std::uint64_t action = 0;  // an action space
@@ -225,6 +230,7 @@ struct Space : Object {
 };
 
 struct Swapchain : Object {
+  static constexpr Kind kKind = Kind::Swapchain;
   Swapchain() : Object(Kind::Swapchain) {}
   std::int64_t format = 0;
   std::uint32_t width = 0, height = 0;
@@ -232,16 +238,19 @@ struct Swapchain : Object {
   std::deque<std::uint32_t> acquired;  // acquired, oldest first
   bool waited = false;                 // the oldest acquired image was waited for
   std::uint32_t next = 0;
-  int released = -1;  // the last released image
+  int released = -1;                      // the last released image
+  XrTime acquiredAt = 0, releasedAt = 0;  // the last acquire and release [runtime clock]
 };
 
 struct ActionSet : Object {
+  static constexpr Kind kKind = Kind::ActionSet;
   ActionSet() : Object(Kind::ActionSet) {}
   std::string name;
   bool attached = false;
 };
 
 struct Action : Object {
+  static constexpr Kind kKind = Kind::Action;
   Action() : Object(Kind::Action) {}
   XrActionType type = XR_ACTION_TYPE_BOOLEAN_INPUT;
   std::string name;
@@ -250,6 +259,7 @@ struct Action : Object {
 };
 
 struct HandTracker : Object {
+  static constexpr Kind kKind = Kind::HandTracker;
   HandTracker() : Object(Kind::HandTracker) {}
   int hand = 0;
 };
@@ -262,6 +272,7 @@ std::vector<JointFrame> g_joints;
 std::int64_t g_startNs = 0;
 struct Stats {
   long submitted = 0, waited = 0, missed = 0, sessions = 0, begun = 0, ended = 0, layers = 0;
+  long instancesDestroyed = 0;  // xrDestroyInstance calls (the mirror tests check an orderly end)
 } g_stats;
 
 template <class T>
@@ -317,6 +328,7 @@ void writeStats() {
   out << "submitted " << g_stats.submitted << "\nwaited " << g_stats.waited << "\nmissed " << g_stats.missed
       << "\nsessions " << g_stats.sessions << "\nbegun " << g_stats.begun << "\nended " << g_stats.ended
       << "\nlayers " << g_stats.layers << "\nperiod_ns " << g_config->period << "\n";
+  out << "instances_destroyed " << g_stats.instancesDestroyed << "\n";
 }
 
 void queueState(Instance& inst, std::uint64_t session, XrSessionState state) {
@@ -458,6 +470,7 @@ struct Gl {
   void (*getTexImage)(GLenum, GLint, GLenum, GLenum, void*) = nullptr;
   GLboolean (*isTexture)(GLuint) = nullptr;
   void (*pixelStorei)(GLenum, GLint) = nullptr;
+  void (*finish)() = nullptr;
   bool load() {
     auto get = [](const char* n) { return glXGetProcAddressARB(reinterpret_cast<const GLubyte*>(n)); };
     genTextures = reinterpret_cast<PFNGLGENTEXTURESEXTPROC>(get("glGenTextures"));
@@ -468,8 +481,9 @@ struct Gl {
     getTexImage = reinterpret_cast<decltype(getTexImage)>(get("glGetTexImage"));
     isTexture = reinterpret_cast<decltype(isTexture)>(get("glIsTexture"));
     pixelStorei = reinterpret_cast<decltype(pixelStorei)>(get("glPixelStorei"));
+    finish = reinterpret_cast<decltype(finish)>(get("glFinish"));
     return genTextures && bindTexture && deleteTextures && texStorage2D && getIntegerv && getTexImage &&
-           isTexture && pixelStorei;
+           isTexture && pixelStorei && finish;
   }
 } g_gl;
 
@@ -514,6 +528,15 @@ XrResult copyString(const std::string& s, std::uint32_t capacity, std::uint32_t*
 }
 
 // ---- the API ----
+/// Runs `body` with the object of `handle` under the runtime's lock, or answers XR_ERROR_HANDLE_INVALID
+/// (the specification's code for a handle that is not a live one of its type) without calling it.
+template <class T, class H, class Body>
+XrResult checked(H handle, Body&& body) {
+  std::lock_guard<std::recursive_mutex> lock(g_mutex);
+  T* object = lookup<T>(handleOf(handle), T::kKind);
+  return object ? body(object) : XR_ERROR_HANDLE_INVALID;
+}
+
 #define LOCK std::lock_guard<std::recursive_mutex> lock(g_mutex)
 
 struct ExtensionInfo {
@@ -592,268 +615,245 @@ void destroyTree(std::uint64_t handle) {
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL DestroyInstance(XrInstance instance) {
-  LOCK;
-  if (!lookup<Instance>(handleOf(instance), Kind::Instance))
-    return XR_ERROR_HANDLE_INVALID;
-  destroyTree(handleOf(instance));
-  writeStats();
-  return XR_SUCCESS;
+  return checked<Instance>(instance, [&](Instance*) -> XrResult {
+    destroyTree(handleOf(instance));
+    ++g_stats.instancesDestroyed;
+    writeStats();
+    return XR_SUCCESS;
+  });
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL GetInstanceProperties(XrInstance instance, XrInstanceProperties* props) {
-  LOCK;
-  if (!lookup<Instance>(handleOf(instance), Kind::Instance))
-    return XR_ERROR_HANDLE_INVALID;
-  props->runtimeVersion = XR_MAKE_VERSION(0, 1, 0);
-  std::snprintf(props->runtimeName, sizeof(props->runtimeName), "FluidPlaying test runtime");
-  return XR_SUCCESS;
+  return checked<Instance>(instance, [&](Instance*) -> XrResult {
+    props->runtimeVersion = XR_MAKE_VERSION(0, 1, 0);
+    std::snprintf(props->runtimeName, sizeof(props->runtimeName), "FluidPlaying test runtime");
+    return XR_SUCCESS;
+  });
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL PollEvent(XrInstance instance, XrEventDataBuffer* event) {
-  LOCK;
-  Instance* inst = lookup<Instance>(handleOf(instance), Kind::Instance);
-  if (!inst)
-    return XR_ERROR_HANDLE_INVALID;
-  if (inst->events.empty())
-    return XR_EVENT_UNAVAILABLE;
-  const XrEventDataBuffer e = inst->events.front();
-  inst->events.pop_front();
-  if (e.type == XR_TYPE_EVENT_DATA_SESSION_STATE_CHANGED) {
-    const auto* sc = reinterpret_cast<const XrEventDataSessionStateChanged*>(&e);
-    if (Session* s = lookup<Session>(handleOf(sc->session), Kind::Session))
-      s->state = sc->state;
-    else
-      return PollEvent(instance, event);  // the session is gone: its events go with it
-  }
-  std::memcpy(event, &e, sizeof(e));
-  return XR_SUCCESS;
+  return checked<Instance>(instance, [&](Instance* inst) -> XrResult {
+    if (inst->events.empty())
+      return XR_EVENT_UNAVAILABLE;
+    const XrEventDataBuffer e = inst->events.front();
+    inst->events.pop_front();
+    if (e.type == XR_TYPE_EVENT_DATA_SESSION_STATE_CHANGED) {
+      const auto* sc = reinterpret_cast<const XrEventDataSessionStateChanged*>(&e);
+      if (Session* s = lookup<Session>(handleOf(sc->session), Kind::Session))
+        s->state = sc->state;
+      else
+        return PollEvent(instance, event);  // the session is gone: its events go with it
+    }
+    std::memcpy(event, &e, sizeof(e));
+    return XR_SUCCESS;
+  });
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL ResultToString(XrInstance instance, XrResult value,
                                               char buffer[XR_MAX_RESULT_STRING_SIZE]) {
-  LOCK;
-  if (!lookup<Instance>(handleOf(instance), Kind::Instance))
-    return XR_ERROR_HANDLE_INVALID;
-  std::snprintf(buffer, XR_MAX_RESULT_STRING_SIZE, "XR_RESULT_%d", int(value));
-  return XR_SUCCESS;
+  return checked<Instance>(instance, [&](Instance*) -> XrResult {
+    std::snprintf(buffer, XR_MAX_RESULT_STRING_SIZE, "XR_RESULT_%d", int(value));
+    return XR_SUCCESS;
+  });
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL StructureTypeToString(XrInstance instance, XrStructureType value,
                                                      char buffer[XR_MAX_STRUCTURE_NAME_SIZE]) {
-  LOCK;
-  if (!lookup<Instance>(handleOf(instance), Kind::Instance))
-    return XR_ERROR_HANDLE_INVALID;
-  std::snprintf(buffer, XR_MAX_STRUCTURE_NAME_SIZE, "XR_STRUCTURE_TYPE_%d", int(value));
-  return XR_SUCCESS;
+  return checked<Instance>(instance, [&](Instance*) -> XrResult {
+    std::snprintf(buffer, XR_MAX_STRUCTURE_NAME_SIZE, "XR_STRUCTURE_TYPE_%d", int(value));
+    return XR_SUCCESS;
+  });
 }
 
 constexpr XrSystemId kSystem = 1;
 
 XRAPI_ATTR XrResult XRAPI_CALL GetSystem(XrInstance instance, const XrSystemGetInfo* info,
                                          XrSystemId* systemId) {
-  LOCK;
-  if (!lookup<Instance>(handleOf(instance), Kind::Instance))
-    return XR_ERROR_HANDLE_INVALID;
-  if (info->formFactor != XR_FORM_FACTOR_HEAD_MOUNTED_DISPLAY &&
-      info->formFactor != XR_FORM_FACTOR_HANDHELD_DISPLAY)
-    return XR_ERROR_FORM_FACTOR_UNSUPPORTED;
-  if (info->formFactor != XR_FORM_FACTOR_HEAD_MOUNTED_DISPLAY || !g_config->hmd)
-    return XR_ERROR_FORM_FACTOR_UNAVAILABLE;
-  *systemId = kSystem;
-  return XR_SUCCESS;
+  return checked<Instance>(instance, [&](Instance*) -> XrResult {
+    if (info->formFactor != XR_FORM_FACTOR_HEAD_MOUNTED_DISPLAY &&
+        info->formFactor != XR_FORM_FACTOR_HANDHELD_DISPLAY)
+      return XR_ERROR_FORM_FACTOR_UNSUPPORTED;
+    if (info->formFactor != XR_FORM_FACTOR_HEAD_MOUNTED_DISPLAY || !g_config->hmd)
+      return XR_ERROR_FORM_FACTOR_UNAVAILABLE;
+    *systemId = kSystem;
+    return XR_SUCCESS;
+  });
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL GetSystemProperties(XrInstance instance, XrSystemId systemId,
                                                    XrSystemProperties* props) {
-  LOCK;
-  Instance* inst = lookup<Instance>(handleOf(instance), Kind::Instance);
-  if (!inst)
-    return XR_ERROR_HANDLE_INVALID;
-  if (systemId != kSystem)
-    return XR_ERROR_SYSTEM_INVALID;
-  props->systemId = kSystem;
-  props->vendorId = 0xf1u;
-  std::snprintf(props->systemName, sizeof(props->systemName), "FluidPlaying test HMD");
-  props->graphicsProperties = {2048, 2048, 16};
-  props->trackingProperties = {XR_TRUE, XR_TRUE};
-  for (auto* next = reinterpret_cast<XrBaseOutStructure*>(props->next); next; next = next->next) {
-    if (next->type == XR_TYPE_SYSTEM_HAND_TRACKING_PROPERTIES_EXT)
-      reinterpret_cast<XrSystemHandTrackingPropertiesEXT*>(next)->supportsHandTracking =
-          inst->handExt && g_config->handTracking ? XR_TRUE : XR_FALSE;
-  }
-  return XR_SUCCESS;
+  return checked<Instance>(instance, [&](Instance* inst) -> XrResult {
+    if (systemId != kSystem)
+      return XR_ERROR_SYSTEM_INVALID;
+    props->systemId = kSystem;
+    props->vendorId = 0xf1u;
+    std::snprintf(props->systemName, sizeof(props->systemName), "FluidPlaying test HMD");
+    props->graphicsProperties = {2048, 2048, 16};
+    props->trackingProperties = {XR_TRUE, XR_TRUE};
+    for (auto* next = reinterpret_cast<XrBaseOutStructure*>(props->next); next; next = next->next) {
+      if (next->type == XR_TYPE_SYSTEM_HAND_TRACKING_PROPERTIES_EXT)
+        reinterpret_cast<XrSystemHandTrackingPropertiesEXT*>(next)->supportsHandTracking =
+            inst->handExt && g_config->handTracking ? XR_TRUE : XR_FALSE;
+    }
+    return XR_SUCCESS;
+  });
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL EnumerateEnvironmentBlendModes(XrInstance instance, XrSystemId systemId,
                                                               XrViewConfigurationType type, uint32_t capacity,
                                                               uint32_t* count,
                                                               XrEnvironmentBlendMode* modes) {
-  LOCK;
-  if (!lookup<Instance>(handleOf(instance), Kind::Instance))
-    return XR_ERROR_HANDLE_INVALID;
-  if (systemId != kSystem)
-    return XR_ERROR_SYSTEM_INVALID;
-  if (type != XR_VIEW_CONFIGURATION_TYPE_PRIMARY_STEREO)
-    return XR_ERROR_VIEW_CONFIGURATION_TYPE_UNSUPPORTED;
-  return enumerate(capacity, count, modes, 1u,
-                   [](XrEnvironmentBlendMode& m, std::uint32_t) { m = XR_ENVIRONMENT_BLEND_MODE_OPAQUE; });
+  return checked<Instance>(instance, [&](Instance*) -> XrResult {
+    if (systemId != kSystem)
+      return XR_ERROR_SYSTEM_INVALID;
+    if (type != XR_VIEW_CONFIGURATION_TYPE_PRIMARY_STEREO)
+      return XR_ERROR_VIEW_CONFIGURATION_TYPE_UNSUPPORTED;
+    return enumerate(capacity, count, modes, 1u,
+                     [](XrEnvironmentBlendMode& m, std::uint32_t) { m = XR_ENVIRONMENT_BLEND_MODE_OPAQUE; });
+  });
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL EnumerateViewConfigurations(XrInstance instance, XrSystemId systemId,
                                                            uint32_t capacity, uint32_t* count,
                                                            XrViewConfigurationType* types) {
-  LOCK;
-  if (!lookup<Instance>(handleOf(instance), Kind::Instance))
-    return XR_ERROR_HANDLE_INVALID;
-  if (systemId != kSystem)
-    return XR_ERROR_SYSTEM_INVALID;
-  return enumerate(capacity, count, types, 1u, [](XrViewConfigurationType& t, std::uint32_t) {
-    t = XR_VIEW_CONFIGURATION_TYPE_PRIMARY_STEREO;
+  return checked<Instance>(instance, [&](Instance*) -> XrResult {
+    if (systemId != kSystem)
+      return XR_ERROR_SYSTEM_INVALID;
+    return enumerate(capacity, count, types, 1u, [](XrViewConfigurationType& t, std::uint32_t) {
+      t = XR_VIEW_CONFIGURATION_TYPE_PRIMARY_STEREO;
+    });
   });
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL GetViewConfigurationProperties(XrInstance instance, XrSystemId systemId,
                                                               XrViewConfigurationType type,
                                                               XrViewConfigurationProperties* props) {
-  LOCK;
-  if (!lookup<Instance>(handleOf(instance), Kind::Instance))
-    return XR_ERROR_HANDLE_INVALID;
-  if (systemId != kSystem)
-    return XR_ERROR_SYSTEM_INVALID;
-  if (type != XR_VIEW_CONFIGURATION_TYPE_PRIMARY_STEREO)
-    return XR_ERROR_VIEW_CONFIGURATION_TYPE_UNSUPPORTED;
-  props->viewConfigurationType = type;
-  props->fovMutable = XR_FALSE;
-  return XR_SUCCESS;
+  return checked<Instance>(instance, [&](Instance*) -> XrResult {
+    if (systemId != kSystem)
+      return XR_ERROR_SYSTEM_INVALID;
+    if (type != XR_VIEW_CONFIGURATION_TYPE_PRIMARY_STEREO)
+      return XR_ERROR_VIEW_CONFIGURATION_TYPE_UNSUPPORTED;
+    props->viewConfigurationType = type;
+    props->fovMutable = XR_FALSE;
+    return XR_SUCCESS;
+  });
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL EnumerateViewConfigurationViews(XrInstance instance, XrSystemId systemId,
                                                                XrViewConfigurationType type,
                                                                uint32_t capacity, uint32_t* count,
                                                                XrViewConfigurationView* views) {
-  LOCK;
-  if (!lookup<Instance>(handleOf(instance), Kind::Instance))
-    return XR_ERROR_HANDLE_INVALID;
-  if (systemId != kSystem)
-    return XR_ERROR_SYSTEM_INVALID;
-  if (type != XR_VIEW_CONFIGURATION_TYPE_PRIMARY_STEREO)
-    return XR_ERROR_VIEW_CONFIGURATION_TYPE_UNSUPPORTED;
-  const auto w = std::uint32_t(g_config->size[0]),
-             h = std::uint32_t(g_config->size.size() > 1 ? g_config->size[1] : w);
-  return enumerate(capacity, count, views, 2u, [&](XrViewConfigurationView& v, std::uint32_t) {
-    v.recommendedImageRectWidth = w;
-    v.recommendedImageRectHeight = h;
-    v.maxImageRectWidth = 4096;
-    v.maxImageRectHeight = 4096;
-    v.recommendedSwapchainSampleCount = 1;
-    v.maxSwapchainSampleCount = 1;
+  return checked<Instance>(instance, [&](Instance*) -> XrResult {
+    if (systemId != kSystem)
+      return XR_ERROR_SYSTEM_INVALID;
+    if (type != XR_VIEW_CONFIGURATION_TYPE_PRIMARY_STEREO)
+      return XR_ERROR_VIEW_CONFIGURATION_TYPE_UNSUPPORTED;
+    const auto w = std::uint32_t(g_config->size[0]),
+               h = std::uint32_t(g_config->size.size() > 1 ? g_config->size[1] : w);
+    return enumerate(capacity, count, views, 2u, [&](XrViewConfigurationView& v, std::uint32_t) {
+      v.recommendedImageRectWidth = w;
+      v.recommendedImageRectHeight = h;
+      v.maxImageRectWidth = 4096;
+      v.maxImageRectHeight = 4096;
+      v.recommendedSwapchainSampleCount = 1;
+      v.maxSwapchainSampleCount = 1;
+    });
   });
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL GetOpenGLGraphicsRequirementsKHR(XrInstance instance, XrSystemId systemId,
                                                                 XrGraphicsRequirementsOpenGLKHR* req) {
-  LOCK;
-  Instance* inst = lookup<Instance>(handleOf(instance), Kind::Instance);
-  if (!inst)
-    return XR_ERROR_HANDLE_INVALID;
-  if (systemId != kSystem)
-    return XR_ERROR_SYSTEM_INVALID;
-  req->minApiVersionSupported = XR_MAKE_VERSION(3, 3, 0);
-  req->maxApiVersionSupported = XR_MAKE_VERSION(4, 6, 0);
-  inst->requirementsQueried = true;
-  return XR_SUCCESS;
+  return checked<Instance>(instance, [&](Instance* inst) -> XrResult {
+    if (systemId != kSystem)
+      return XR_ERROR_SYSTEM_INVALID;
+    req->minApiVersionSupported = XR_MAKE_VERSION(3, 3, 0);
+    req->maxApiVersionSupported = XR_MAKE_VERSION(4, 6, 0);
+    inst->requirementsQueried = true;
+    return XR_SUCCESS;
+  });
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL CreateSession(XrInstance instance, const XrSessionCreateInfo* info,
                                              XrSession* session) {
-  LOCK;
-  Instance* inst = lookup<Instance>(handleOf(instance), Kind::Instance);
-  if (!inst)
-    return XR_ERROR_HANDLE_INVALID;
-  if (info->systemId != kSystem)
-    return XR_ERROR_SYSTEM_INVALID;
-  if (!inst->requirementsQueried)
-    return XR_ERROR_GRAPHICS_REQUIREMENTS_CALL_MISSING;
-  const XrGraphicsBindingOpenGLXlibKHR* binding = nullptr;
-  for (auto* next = reinterpret_cast<const XrBaseInStructure*>(info->next); next; next = next->next) {
-    if (next->type == XR_TYPE_GRAPHICS_BINDING_OPENGL_XLIB_KHR)
-      binding = reinterpret_cast<const XrGraphicsBindingOpenGLXlibKHR*>(next);
-  }
-  if (!binding || !binding->xDisplay || !binding->glxContext)
-    return XR_ERROR_GRAPHICS_DEVICE_INVALID;
-  if (inst->session)
-    return XR_ERROR_LIMIT_REACHED;
-  if (glXGetCurrentContext() != binding->glxContext || !g_gl.load())
-    return XR_ERROR_GRAPHICS_DEVICE_INVALID;
-  auto s = std::make_unique<Session>();
-  const XrSession h = create<Session, XrSession>(std::move(s), handleOf(instance));
-  inst->session = handleOf(h);
-  queueState(*inst, handleOf(h), XR_SESSION_STATE_IDLE);
-  queueState(*inst, handleOf(h), XR_SESSION_STATE_READY);
-  ++g_stats.sessions;
-  *session = h;
-  return XR_SUCCESS;
+  return checked<Instance>(instance, [&](Instance* inst) -> XrResult {
+    if (info->systemId != kSystem)
+      return XR_ERROR_SYSTEM_INVALID;
+    if (!inst->requirementsQueried)
+      return XR_ERROR_GRAPHICS_REQUIREMENTS_CALL_MISSING;
+    const XrGraphicsBindingOpenGLXlibKHR* binding = nullptr;
+    for (auto* next = reinterpret_cast<const XrBaseInStructure*>(info->next); next; next = next->next) {
+      if (next->type == XR_TYPE_GRAPHICS_BINDING_OPENGL_XLIB_KHR)
+        binding = reinterpret_cast<const XrGraphicsBindingOpenGLXlibKHR*>(next);
+    }
+    if (!binding || !binding->xDisplay || !binding->glxContext)
+      return XR_ERROR_GRAPHICS_DEVICE_INVALID;
+    if (inst->session)
+      return XR_ERROR_LIMIT_REACHED;
+    if (glXGetCurrentContext() != binding->glxContext || !g_gl.load())
+      return XR_ERROR_GRAPHICS_DEVICE_INVALID;
+    auto s = std::make_unique<Session>();
+    const XrSession h = create<Session, XrSession>(std::move(s), handleOf(instance));
+    inst->session = handleOf(h);
+    queueState(*inst, handleOf(h), XR_SESSION_STATE_IDLE);
+    queueState(*inst, handleOf(h), XR_SESSION_STATE_READY);
+    ++g_stats.sessions;
+    *session = h;
+    return XR_SUCCESS;
+  });
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL DestroySession(XrSession session) {
-  LOCK;
-  if (!lookup<Session>(handleOf(session), Kind::Session))
-    return XR_ERROR_HANDLE_INVALID;
-  Instance* inst = instanceOf(handleOf(session));
-  inst->session = 0;
-  destroyTree(handleOf(session));
-  writeStats();
-  return XR_SUCCESS;
+  return checked<Session>(session, [&](Session*) -> XrResult {
+    Instance* inst = instanceOf(handleOf(session));
+    inst->session = 0;
+    destroyTree(handleOf(session));
+    writeStats();
+    return XR_SUCCESS;
+  });
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL BeginSession(XrSession session, const XrSessionBeginInfo* info) {
-  LOCK;
-  Session* s = lookup<Session>(handleOf(session), Kind::Session);
-  if (!s)
-    return XR_ERROR_HANDLE_INVALID;
-  if (info->primaryViewConfigurationType != XR_VIEW_CONFIGURATION_TYPE_PRIMARY_STEREO)
-    return XR_ERROR_VIEW_CONFIGURATION_TYPE_UNSUPPORTED;
-  if (s->running)
-    return XR_ERROR_SESSION_RUNNING;
-  if (s->state != XR_SESSION_STATE_READY)
-    return XR_ERROR_SESSION_NOT_READY;
-  s->running = true;
-  s->beginTime = runtimeNow();
-  s->lastDisplay = s->beginTime;
-  ++g_stats.begun;
-  return XR_SUCCESS;
+  return checked<Session>(session, [&](Session* s) -> XrResult {
+    if (info->primaryViewConfigurationType != XR_VIEW_CONFIGURATION_TYPE_PRIMARY_STEREO)
+      return XR_ERROR_VIEW_CONFIGURATION_TYPE_UNSUPPORTED;
+    if (s->running)
+      return XR_ERROR_SESSION_RUNNING;
+    if (s->state != XR_SESSION_STATE_READY)
+      return XR_ERROR_SESSION_NOT_READY;
+    s->running = true;
+    s->beginTime = runtimeNow();
+    s->lastDisplay = s->beginTime;
+    ++g_stats.begun;
+    return XR_SUCCESS;
+  });
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL EndSession(XrSession session) {
-  LOCK;
-  Session* s = lookup<Session>(handleOf(session), Kind::Session);
-  if (!s)
-    return XR_ERROR_HANDLE_INVALID;
-  if (!s->running)
-    return XR_ERROR_SESSION_NOT_RUNNING;
-  if (s->state != XR_SESSION_STATE_STOPPING)
-    return XR_ERROR_SESSION_NOT_STOPPING;
-  s->running = false;
-  s->waited = s->begun = false;
-  Instance* inst = instanceOf(handleOf(session));
-  queueState(*inst, handleOf(session), XR_SESSION_STATE_IDLE);
-  // an exit the application asked for, or one the runtime scripted: the session ends for good
-  queueState(*inst, handleOf(session), XR_SESSION_STATE_EXITING);
-  ++g_stats.ended;
-  writeStats();
-  return XR_SUCCESS;
+  return checked<Session>(session, [&](Session* s) -> XrResult {
+    if (!s->running)
+      return XR_ERROR_SESSION_NOT_RUNNING;
+    if (s->state != XR_SESSION_STATE_STOPPING)
+      return XR_ERROR_SESSION_NOT_STOPPING;
+    s->running = false;
+    s->waited = s->begun = false;
+    Instance* inst = instanceOf(handleOf(session));
+    queueState(*inst, handleOf(session), XR_SESSION_STATE_IDLE);
+    // an exit the application asked for, or one the runtime scripted: the session ends for good
+    queueState(*inst, handleOf(session), XR_SESSION_STATE_EXITING);
+    ++g_stats.ended;
+    writeStats();
+    return XR_SUCCESS;
+  });
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL RequestExitSession(XrSession session) {
-  LOCK;
-  Session* s = lookup<Session>(handleOf(session), Kind::Session);
-  if (!s)
-    return XR_ERROR_HANDLE_INVALID;
-  if (!s->running)
-    return XR_ERROR_SESSION_NOT_RUNNING;
-  s->exitRequested = true;
-  queueStop(*instanceOf(handleOf(session)), handleOf(session), *s);
-  return XR_SUCCESS;
+  return checked<Session>(session, [&](Session* s) -> XrResult {
+    if (!s->running)
+      return XR_ERROR_SESSION_NOT_RUNNING;
+    s->exitRequested = true;
+    queueStop(*instanceOf(handleOf(session)), handleOf(session), *s);
+    return XR_SUCCESS;
+  });
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL WaitFrame(XrSession session, const XrFrameWaitInfo* info,
@@ -867,6 +867,7 @@ XRAPI_ATTR XrResult XRAPI_CALL WaitFrame(XrSession session, const XrFrameWaitInf
       return XR_ERROR_HANDLE_INVALID;
     if (!s->running)
       return XR_ERROR_SESSION_NOT_RUNNING;
+    s->waitCalled = runtimeNow();
     const std::int64_t period = g_config->period;
     XrTime display = s->lastDisplay + period;
     if (!g_config->virtualTime) {
@@ -899,173 +900,180 @@ XRAPI_ATTR XrResult XRAPI_CALL WaitFrame(XrSession session, const XrFrameWaitInf
     if (wait > 0)
       std::this_thread::sleep_for(std::chrono::nanoseconds(wait));
   }
+  LOCK;
+  if (Session* s = lookup<Session>(handleOf(session), Kind::Session))
+    s->waitReturned = runtimeNow();
   return XR_SUCCESS;
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL BeginFrame(XrSession session, const XrFrameBeginInfo*) {
-  LOCK;
-  Session* s = lookup<Session>(handleOf(session), Kind::Session);
-  if (!s)
-    return XR_ERROR_HANDLE_INVALID;
-  if (!s->running)
-    return XR_ERROR_SESSION_NOT_RUNNING;
-  if (!s->waited)
-    return XR_ERROR_CALL_ORDER_INVALID;
-  s->waited = false;
-  if (s->begun)
-    return XR_FRAME_DISCARDED;  // the previous begun frame was never ended
-  s->begun = true;
-  return XR_SUCCESS;
+  return checked<Session>(session, [&](Session* s) -> XrResult {
+    if (!s->running)
+      return XR_ERROR_SESSION_NOT_RUNNING;
+    if (!s->waited)
+      return XR_ERROR_CALL_ORDER_INVALID;
+    s->waited = false;
+    if (s->begun)
+      return XR_FRAME_DISCARDED;  // the previous begun frame was never ended
+    s->begun = true;
+    return XR_SUCCESS;
+  });
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL EndFrame(XrSession session, const XrFrameEndInfo* info) {
-  LOCK;
-  Session* s = lookup<Session>(handleOf(session), Kind::Session);
-  if (!s)
-    return XR_ERROR_HANDLE_INVALID;
-  if (!s->running)
-    return XR_ERROR_SESSION_NOT_RUNNING;
-  if (!s->begun)
-    return XR_ERROR_CALL_ORDER_INVALID;
-  if (info->displayTime != s->waitedDisplay)
-    return XR_ERROR_TIME_INVALID;
-  if (info->environmentBlendMode != XR_ENVIRONMENT_BLEND_MODE_OPAQUE)
-    return XR_ERROR_ENVIRONMENT_BLEND_MODE_UNSUPPORTED;
-  if (info->layerCount > 16)
-    return XR_ERROR_LAYER_LIMIT_EXCEEDED;
-  // capture "FRAME,DIR"
-  long captureFrame = -1;
-  std::string captureDir;
-  if (!g_config->capture.empty()) {
-    const std::size_t comma = g_config->capture.find(',');
-    captureFrame = std::atol(g_config->capture.substr(0, comma).c_str());
-    captureDir = g_config->capture.substr(comma + 1);
-  }
-  for (std::uint32_t l = 0; l < info->layerCount; ++l) {
-    const XrCompositionLayerBaseHeader* layer = info->layers[l];
-    if (!layer)
-      return XR_ERROR_LAYER_INVALID;
-    if (layer->type != XR_TYPE_COMPOSITION_LAYER_PROJECTION)
-      return XR_ERROR_LAYER_INVALID;
-    const auto* proj = reinterpret_cast<const XrCompositionLayerProjection*>(layer);
-    if (!lookup<Space>(handleOf(proj->space), Kind::Space))
-      return XR_ERROR_HANDLE_INVALID;
-    if (proj->viewCount != 2)
-      return XR_ERROR_VALIDATION_FAILURE;
-    for (std::uint32_t v = 0; v < 2; ++v) {
-      const XrSwapchainSubImage& sub = proj->views[v].subImage;
-      Swapchain* sc = lookup<Swapchain>(handleOf(sub.swapchain), Kind::Swapchain);
-      if (!sc)
-        return XR_ERROR_HANDLE_INVALID;
-      if (sc->released < 0)
+  return checked<Session>(session, [&](Session* s) -> XrResult {
+    if (!s->running)
+      return XR_ERROR_SESSION_NOT_RUNNING;
+    if (!s->begun)
+      return XR_ERROR_CALL_ORDER_INVALID;
+    if (info->displayTime != s->waitedDisplay)
+      return XR_ERROR_TIME_INVALID;
+    if (info->environmentBlendMode != XR_ENVIRONMENT_BLEND_MODE_OPAQUE)
+      return XR_ERROR_ENVIRONMENT_BLEND_MODE_UNSUPPORTED;
+    if (info->layerCount > 16)
+      return XR_ERROR_LAYER_LIMIT_EXCEEDED;
+    // capture "FRAME,DIR"
+    long captureFrame = -1;
+    std::string captureDir;
+    if (!g_config->capture.empty()) {
+      const std::size_t comma = g_config->capture.find(',');
+      captureFrame = std::atol(g_config->capture.substr(0, comma).c_str());
+      captureDir = g_config->capture.substr(comma + 1);
+    }
+    for (std::uint32_t l = 0; l < info->layerCount; ++l) {
+      const XrCompositionLayerBaseHeader* layer = info->layers[l];
+      if (!layer)
         return XR_ERROR_LAYER_INVALID;
-      if (sub.imageRect.offset.x < 0 || sub.imageRect.offset.y < 0 || sub.imageRect.extent.width <= 0 ||
-          sub.imageRect.extent.height <= 0 ||
-          std::uint32_t(sub.imageRect.offset.x + sub.imageRect.extent.width) > sc->width ||
-          std::uint32_t(sub.imageRect.offset.y + sub.imageRect.extent.height) > sc->height)
-        return XR_ERROR_SWAPCHAIN_RECT_INVALID;
-      if (!poseValid(proj->views[v].pose))
-        return XR_ERROR_POSE_INVALID;
-      if (captureFrame == g_stats.waited)
-        captureImage(*sc, std::uint32_t(sc->released), sub.imageRect,
-                     captureDir + "/eye" + std::to_string(v) + ".ppm");
-      for (auto* next = reinterpret_cast<const XrBaseInStructure*>(proj->views[v].next); next;
-           next = next->next) {
-        if (next->type == XR_TYPE_COMPOSITION_LAYER_DEPTH_INFO_KHR) {
-          const auto* depth = reinterpret_cast<const XrCompositionLayerDepthInfoKHR*>(next);
-          Swapchain* dsc = lookup<Swapchain>(handleOf(depth->subImage.swapchain), Kind::Swapchain);
-          if (!dsc)
-            return XR_ERROR_HANDLE_INVALID;
-          if (dsc->released < 0)
-            return XR_ERROR_LAYER_INVALID;
+      if (layer->type != XR_TYPE_COMPOSITION_LAYER_PROJECTION)
+        return XR_ERROR_LAYER_INVALID;
+      const auto* proj = reinterpret_cast<const XrCompositionLayerProjection*>(layer);
+      if (!lookup<Space>(handleOf(proj->space), Kind::Space))
+        return XR_ERROR_HANDLE_INVALID;
+      if (proj->viewCount != 2)
+        return XR_ERROR_VALIDATION_FAILURE;
+      for (std::uint32_t v = 0; v < 2; ++v) {
+        const XrSwapchainSubImage& sub = proj->views[v].subImage;
+        Swapchain* sc = lookup<Swapchain>(handleOf(sub.swapchain), Kind::Swapchain);
+        if (!sc)
+          return XR_ERROR_HANDLE_INVALID;
+        if (sc->released < 0)
+          return XR_ERROR_LAYER_INVALID;
+        if (sub.imageRect.offset.x < 0 || sub.imageRect.offset.y < 0 || sub.imageRect.extent.width <= 0 ||
+            sub.imageRect.extent.height <= 0 ||
+            std::uint32_t(sub.imageRect.offset.x + sub.imageRect.extent.width) > sc->width ||
+            std::uint32_t(sub.imageRect.offset.y + sub.imageRect.extent.height) > sc->height)
+          return XR_ERROR_SWAPCHAIN_RECT_INVALID;
+        if (!poseValid(proj->views[v].pose))
+          return XR_ERROR_POSE_INVALID;
+        if (captureFrame == g_stats.waited)
+          captureImage(*sc, std::uint32_t(sc->released), sub.imageRect,
+                       captureDir + "/eye" + std::to_string(v) + ".ppm");
+        for (auto* next = reinterpret_cast<const XrBaseInStructure*>(proj->views[v].next); next;
+             next = next->next) {
+          if (next->type == XR_TYPE_COMPOSITION_LAYER_DEPTH_INFO_KHR) {
+            const auto* depth = reinterpret_cast<const XrCompositionLayerDepthInfoKHR*>(next);
+            Swapchain* dsc = lookup<Swapchain>(handleOf(depth->subImage.swapchain), Kind::Swapchain);
+            if (!dsc)
+              return XR_ERROR_HANDLE_INVALID;
+            if (dsc->released < 0)
+              return XR_ERROR_LAYER_INVALID;
+          }
         }
       }
     }
-  }
-  s->begun = false;
-  ++g_stats.submitted;
-  g_stats.layers += info->layerCount;
-  if (s->frame % 16 == 0)
-    writeStats();
-  return XR_SUCCESS;
+    s->begun = false;
+    if (!g_config->frameLog.empty()) {
+      std::ofstream log(g_config->frameLog, std::ios::app);
+      log << s->waitedDisplay << ' ' << runtimeNow() << ' ' << s->waitCalled << ' ' << s->waitReturned;
+      for (std::uint32_t v = 0; v < 2; ++v) {
+        const auto* proj = info->layerCount
+                               ? reinterpret_cast<const XrCompositionLayerProjection*>(info->layers[0])
+                               : nullptr;
+        const Swapchain* sc =
+            proj ? lookup<Swapchain>(handleOf(proj->views[v].subImage.swapchain), Kind::Swapchain) : nullptr;
+        log << ' ' << (sc ? sc->acquiredAt : 0) << ' ' << (sc ? sc->releasedAt : 0);
+      }
+      log << '\n';
+    }
+    ++g_stats.submitted;
+    g_stats.layers += info->layerCount;
+    if (s->frame % 16 == 0)
+      writeStats();
+    return XR_SUCCESS;
+  });
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL LocateViews(XrSession session, const XrViewLocateInfo* info,
                                            XrViewState* viewState, uint32_t capacity, uint32_t* count,
                                            XrView* views) {
-  LOCK;
-  Session* s = lookup<Session>(handleOf(session), Kind::Session);
-  if (!s)
-    return XR_ERROR_HANDLE_INVALID;
-  Space* base = lookup<Space>(handleOf(info->space), Kind::Space);
-  if (!base)
-    return XR_ERROR_HANDLE_INVALID;
-  if (info->viewConfigurationType != XR_VIEW_CONFIGURATION_TYPE_PRIMARY_STEREO)
-    return XR_ERROR_VIEW_CONFIGURATION_TYPE_UNSUPPORTED;
-  if (info->displayTime <= 0)
-    return XR_ERROR_TIME_INVALID;
-  Pose baseInStage;
-  const bool located = spaceInStage(*s, *base, info->displayTime, baseInStage);
-  viewState->viewStateFlags =
-      located ? XR_VIEW_STATE_ORIENTATION_VALID_BIT | XR_VIEW_STATE_POSITION_VALID_BIT |
-                    XR_VIEW_STATE_ORIENTATION_TRACKED_BIT | XR_VIEW_STATE_POSITION_TRACKED_BIT
-              : 0;
-  const Pose head = headPose();
-  return enumerate(capacity, count, views, 2u, [&](XrView& v, std::uint32_t i) {
-    const double side = i == 0 ? -1.0 : 1.0;
-    const Pose eye = head * Pose{Quat{}, Vec{side * 0.5 * g_config->ipd, 0, 0}};
-    v.pose = toXr(baseInStage.inverse() * eye);
-    // asymmetric: each eye sees more on its outer side
-    v.fov.angleLeft = i == 0 ? -0.95f : -0.80f;
-    v.fov.angleRight = i == 0 ? 0.80f : 0.95f;
-    v.fov.angleUp = 0.85f;
-    v.fov.angleDown = -0.90f;
+  return checked<Session>(session, [&](Session* s) -> XrResult {
+    Space* base = lookup<Space>(handleOf(info->space), Kind::Space);
+    if (!base)
+      return XR_ERROR_HANDLE_INVALID;
+    if (info->viewConfigurationType != XR_VIEW_CONFIGURATION_TYPE_PRIMARY_STEREO)
+      return XR_ERROR_VIEW_CONFIGURATION_TYPE_UNSUPPORTED;
+    if (info->displayTime <= 0)
+      return XR_ERROR_TIME_INVALID;
+    Pose baseInStage;
+    const bool located = spaceInStage(*s, *base, info->displayTime, baseInStage);
+    viewState->viewStateFlags =
+        located ? XR_VIEW_STATE_ORIENTATION_VALID_BIT | XR_VIEW_STATE_POSITION_VALID_BIT |
+                      XR_VIEW_STATE_ORIENTATION_TRACKED_BIT | XR_VIEW_STATE_POSITION_TRACKED_BIT
+                : 0;
+    const Pose head = headPose();
+    return enumerate(capacity, count, views, 2u, [&](XrView& v, std::uint32_t i) {
+      const double side = i == 0 ? -1.0 : 1.0;
+      const Pose eye = head * Pose{Quat{}, Vec{side * 0.5 * g_config->ipd, 0, 0}};
+      v.pose = toXr(baseInStage.inverse() * eye);
+      // asymmetric: each eye sees more on its outer side
+      v.fov.angleLeft = i == 0 ? -0.95f : -0.80f;
+      v.fov.angleRight = i == 0 ? 0.80f : 0.95f;
+      v.fov.angleUp = 0.85f;
+      v.fov.angleDown = -0.90f;
+    });
   });
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL EnumerateReferenceSpaces(XrSession session, uint32_t capacity, uint32_t* count,
                                                         XrReferenceSpaceType* spaces) {
-  LOCK;
-  if (!lookup<Session>(handleOf(session), Kind::Session))
-    return XR_ERROR_HANDLE_INVALID;
-  std::vector<XrReferenceSpaceType> types = {XR_REFERENCE_SPACE_TYPE_VIEW, XR_REFERENCE_SPACE_TYPE_LOCAL};
-  if (g_config->stage)
-    types.push_back(XR_REFERENCE_SPACE_TYPE_STAGE);
-  return enumerate(capacity, count, spaces, std::uint32_t(types.size()),
-                   [&](XrReferenceSpaceType& t, std::uint32_t i) { t = types[i]; });
+  return checked<Session>(session, [&](Session*) -> XrResult {
+    std::vector<XrReferenceSpaceType> types = {XR_REFERENCE_SPACE_TYPE_VIEW, XR_REFERENCE_SPACE_TYPE_LOCAL};
+    if (g_config->stage)
+      types.push_back(XR_REFERENCE_SPACE_TYPE_STAGE);
+    return enumerate(capacity, count, spaces, std::uint32_t(types.size()),
+                     [&](XrReferenceSpaceType& t, std::uint32_t i) { t = types[i]; });
+  });
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL CreateReferenceSpace(XrSession session, const XrReferenceSpaceCreateInfo* info,
                                                     XrSpace* space) {
-  LOCK;
-  if (!lookup<Session>(handleOf(session), Kind::Session))
-    return XR_ERROR_HANDLE_INVALID;
-  if (info->referenceSpaceType != XR_REFERENCE_SPACE_TYPE_VIEW &&
-      info->referenceSpaceType != XR_REFERENCE_SPACE_TYPE_LOCAL &&
-      (info->referenceSpaceType != XR_REFERENCE_SPACE_TYPE_STAGE || !g_config->stage))
-    return XR_ERROR_REFERENCE_SPACE_UNSUPPORTED;
-  if (!poseValid(info->poseInReferenceSpace))
-    return XR_ERROR_POSE_INVALID;
-  auto sp = std::make_unique<Space>();
-  sp->type = info->referenceSpaceType;
-  sp->offset = fromXr(info->poseInReferenceSpace);
-  *space = create<Space, XrSpace>(std::move(sp), handleOf(session));
-  return XR_SUCCESS;
+  return checked<Session>(session, [&](Session*) -> XrResult {
+    if (info->referenceSpaceType != XR_REFERENCE_SPACE_TYPE_VIEW &&
+        info->referenceSpaceType != XR_REFERENCE_SPACE_TYPE_LOCAL &&
+        (info->referenceSpaceType != XR_REFERENCE_SPACE_TYPE_STAGE || !g_config->stage))
+      return XR_ERROR_REFERENCE_SPACE_UNSUPPORTED;
+    if (!poseValid(info->poseInReferenceSpace))
+      return XR_ERROR_POSE_INVALID;
+    auto sp = std::make_unique<Space>();
+    sp->type = info->referenceSpaceType;
+    sp->offset = fromXr(info->poseInReferenceSpace);
+    *space = create<Space, XrSpace>(std::move(sp), handleOf(session));
+    return XR_SUCCESS;
+  });
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL GetReferenceSpaceBoundsRect(XrSession session, XrReferenceSpaceType type,
                                                            XrExtent2Df* bounds) {
-  LOCK;
-  if (!lookup<Session>(handleOf(session), Kind::Session))
-    return XR_ERROR_HANDLE_INVALID;
-  if (type == XR_REFERENCE_SPACE_TYPE_STAGE && g_config->stage) {
-    *bounds = {3.0f, 3.0f};
-    return XR_SUCCESS;
-  }
-  if (type != XR_REFERENCE_SPACE_TYPE_VIEW && type != XR_REFERENCE_SPACE_TYPE_LOCAL)
-    return XR_ERROR_REFERENCE_SPACE_UNSUPPORTED;
-  *bounds = {0.0f, 0.0f};
-  return XR_SPACE_BOUNDS_UNAVAILABLE;
+  return checked<Session>(session, [&](Session*) -> XrResult {
+    if (type == XR_REFERENCE_SPACE_TYPE_STAGE && g_config->stage) {
+      *bounds = {3.0f, 3.0f};
+      return XR_SUCCESS;
+    }
+    if (type != XR_REFERENCE_SPACE_TYPE_VIEW && type != XR_REFERENCE_SPACE_TYPE_LOCAL)
+      return XR_ERROR_REFERENCE_SPACE_UNSUPPORTED;
+    *bounds = {0.0f, 0.0f};
+    return XR_SPACE_BOUNDS_UNAVAILABLE;
+  });
 }
 
 int handOfPath(const Instance& inst, XrPath path) {
@@ -1080,25 +1088,24 @@ int handOfPath(const Instance& inst, XrPath path) {
 
 XRAPI_ATTR XrResult XRAPI_CALL CreateActionSpace(XrSession session, const XrActionSpaceCreateInfo* info,
                                                  XrSpace* space) {
-  LOCK;
-  if (!lookup<Session>(handleOf(session), Kind::Session))
-    return XR_ERROR_HANDLE_INVALID;
-  Action* a = lookup<Action>(handleOf(info->action), Kind::Action);
-  if (!a)
-    return XR_ERROR_HANDLE_INVALID;
-  if (a->type != XR_ACTION_TYPE_POSE_INPUT)
-    return XR_ERROR_ACTION_TYPE_MISMATCH;
-  if (info->subactionPath != XR_NULL_PATH &&
-      std::find(a->subactions.begin(), a->subactions.end(), info->subactionPath) == a->subactions.end())
-    return XR_ERROR_PATH_UNSUPPORTED;
-  if (!poseValid(info->poseInActionSpace))
-    return XR_ERROR_POSE_INVALID;
-  auto sp = std::make_unique<Space>();
-  sp->action = handleOf(info->action);
-  sp->hand = handOfPath(*instanceOf(handleOf(session)), info->subactionPath);
-  sp->offset = fromXr(info->poseInActionSpace);
-  *space = create<Space, XrSpace>(std::move(sp), handleOf(session));
-  return XR_SUCCESS;
+  return checked<Session>(session, [&](Session*) -> XrResult {
+    Action* a = lookup<Action>(handleOf(info->action), Kind::Action);
+    if (!a)
+      return XR_ERROR_HANDLE_INVALID;
+    if (a->type != XR_ACTION_TYPE_POSE_INPUT)
+      return XR_ERROR_ACTION_TYPE_MISMATCH;
+    if (info->subactionPath != XR_NULL_PATH &&
+        std::find(a->subactions.begin(), a->subactions.end(), info->subactionPath) == a->subactions.end())
+      return XR_ERROR_PATH_UNSUPPORTED;
+    if (!poseValid(info->poseInActionSpace))
+      return XR_ERROR_POSE_INVALID;
+    auto sp = std::make_unique<Space>();
+    sp->action = handleOf(info->action);
+    sp->hand = handOfPath(*instanceOf(handleOf(session)), info->subactionPath);
+    sp->offset = fromXr(info->poseInActionSpace);
+    *space = create<Space, XrSpace>(std::move(sp), handleOf(session));
+    return XR_SUCCESS;
+  });
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL LocateSpace(XrSpace space, XrSpace baseSpace, XrTime time,
@@ -1124,124 +1131,115 @@ XRAPI_ATTR XrResult XRAPI_CALL LocateSpace(XrSpace space, XrSpace baseSpace, XrT
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL DestroySpace(XrSpace space) {
-  LOCK;
-  if (!lookup<Space>(handleOf(space), Kind::Space))
-    return XR_ERROR_HANDLE_INVALID;
-  destroyTree(handleOf(space));
-  return XR_SUCCESS;
+  return checked<Space>(space, [&](Space*) -> XrResult {
+    destroyTree(handleOf(space));
+    return XR_SUCCESS;
+  });
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL EnumerateSwapchainFormats(XrSession session, uint32_t capacity,
                                                          uint32_t* count, int64_t* formats) {
-  LOCK;
-  if (!lookup<Session>(handleOf(session), Kind::Session))
-    return XR_ERROR_HANDLE_INVALID;
-  const auto& f = g_config->formats;
-  return enumerate(capacity, count, formats, std::uint32_t(f.size()),
-                   [&](int64_t& out, std::uint32_t i) { out = std::int64_t(f[i]); });
+  return checked<Session>(session, [&](Session*) -> XrResult {
+    const auto& f = g_config->formats;
+    return enumerate(capacity, count, formats, std::uint32_t(f.size()),
+                     [&](int64_t& out, std::uint32_t i) { out = std::int64_t(f[i]); });
+  });
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL CreateSwapchain(XrSession session, const XrSwapchainCreateInfo* info,
                                                XrSwapchain* swapchain) {
-  LOCK;
-  Session* s = lookup<Session>(handleOf(session), Kind::Session);
-  if (!s)
-    return XR_ERROR_HANDLE_INVALID;
-  const auto& f = g_config->formats;
-  if (std::find(f.begin(), f.end(), double(info->format)) == f.end())
-    return XR_ERROR_SWAPCHAIN_FORMAT_UNSUPPORTED;
-  if (info->width == 0 || info->height == 0 || info->width > 4096 || info->height > 4096 ||
-      info->arraySize != 1 || info->faceCount != 1 || info->mipCount != 1 || info->sampleCount != 1)
-    return XR_ERROR_FEATURE_UNSUPPORTED;
-  if (!glXGetCurrentContext() || !g_gl.load())
-    return XR_ERROR_GRAPHICS_DEVICE_INVALID;
-  auto sc = std::make_unique<Swapchain>();
-  sc->format = info->format;
-  sc->width = info->width;
-  sc->height = info->height;
-  sc->textures.resize(3);
-  GLint bound = 0;
-  g_gl.getIntegerv(GL_TEXTURE_BINDING_2D, &bound);
-  g_gl.genTextures(3, sc->textures.data());
-  for (GLuint t : sc->textures) {
-    g_gl.bindTexture(GL_TEXTURE_2D, t);
-    g_gl.texStorage2D(GL_TEXTURE_2D, 1, GLenum(info->format), GLsizei(info->width), GLsizei(info->height));
-    if (!g_gl.isTexture(t))
-      return XR_ERROR_RUNTIME_FAILURE;
-  }
-  g_gl.bindTexture(GL_TEXTURE_2D, GLuint(bound));
-  const XrSwapchain h = create<Swapchain, XrSwapchain>(std::move(sc), handleOf(session));
-  s->swapchains.push_back(handleOf(h));
-  *swapchain = h;
-  return XR_SUCCESS;
+  return checked<Session>(session, [&](Session* s) -> XrResult {
+    const auto& f = g_config->formats;
+    if (std::find(f.begin(), f.end(), double(info->format)) == f.end())
+      return XR_ERROR_SWAPCHAIN_FORMAT_UNSUPPORTED;
+    if (info->width == 0 || info->height == 0 || info->width > 4096 || info->height > 4096 ||
+        info->arraySize != 1 || info->faceCount != 1 || info->mipCount != 1 || info->sampleCount != 1)
+      return XR_ERROR_FEATURE_UNSUPPORTED;
+    if (!glXGetCurrentContext() || !g_gl.load())
+      return XR_ERROR_GRAPHICS_DEVICE_INVALID;
+    auto sc = std::make_unique<Swapchain>();
+    sc->format = info->format;
+    sc->width = info->width;
+    sc->height = info->height;
+    sc->textures.resize(3);
+    GLint bound = 0;
+    g_gl.getIntegerv(GL_TEXTURE_BINDING_2D, &bound);
+    g_gl.genTextures(3, sc->textures.data());
+    for (GLuint t : sc->textures) {
+      g_gl.bindTexture(GL_TEXTURE_2D, t);
+      g_gl.texStorage2D(GL_TEXTURE_2D, 1, GLenum(info->format), GLsizei(info->width), GLsizei(info->height));
+      if (!g_gl.isTexture(t))
+        return XR_ERROR_RUNTIME_FAILURE;
+    }
+    g_gl.bindTexture(GL_TEXTURE_2D, GLuint(bound));
+    const XrSwapchain h = create<Swapchain, XrSwapchain>(std::move(sc), handleOf(session));
+    s->swapchains.push_back(handleOf(h));
+    *swapchain = h;
+    return XR_SUCCESS;
+  });
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL DestroySwapchain(XrSwapchain swapchain) {
-  LOCK;
-  if (!lookup<Swapchain>(handleOf(swapchain), Kind::Swapchain))
-    return XR_ERROR_HANDLE_INVALID;
-  destroyTree(handleOf(swapchain));
-  return XR_SUCCESS;
+  return checked<Swapchain>(swapchain, [&](Swapchain*) -> XrResult {
+    destroyTree(handleOf(swapchain));
+    return XR_SUCCESS;
+  });
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL EnumerateSwapchainImages(XrSwapchain swapchain, uint32_t capacity,
                                                         uint32_t* count, XrSwapchainImageBaseHeader* images) {
-  LOCK;
-  Swapchain* sc = lookup<Swapchain>(handleOf(swapchain), Kind::Swapchain);
-  if (!sc)
-    return XR_ERROR_HANDLE_INVALID;
-  if (!count)
-    return XR_ERROR_VALIDATION_FAILURE;
-  *count = std::uint32_t(sc->textures.size());
-  if (capacity == 0)
+  return checked<Swapchain>(swapchain, [&](Swapchain* sc) -> XrResult {
+    if (!count)
+      return XR_ERROR_VALIDATION_FAILURE;
+    *count = std::uint32_t(sc->textures.size());
+    if (capacity == 0)
+      return XR_SUCCESS;
+    if (capacity < sc->textures.size())
+      return XR_ERROR_SIZE_INSUFFICIENT;
+    if (images[0].type != XR_TYPE_SWAPCHAIN_IMAGE_OPENGL_KHR)
+      return XR_ERROR_VALIDATION_FAILURE;
+    auto* gl = reinterpret_cast<XrSwapchainImageOpenGLKHR*>(images);
+    for (std::size_t i = 0; i < sc->textures.size(); ++i)
+      gl[i].image = sc->textures[i];
     return XR_SUCCESS;
-  if (capacity < sc->textures.size())
-    return XR_ERROR_SIZE_INSUFFICIENT;
-  if (images[0].type != XR_TYPE_SWAPCHAIN_IMAGE_OPENGL_KHR)
-    return XR_ERROR_VALIDATION_FAILURE;
-  auto* gl = reinterpret_cast<XrSwapchainImageOpenGLKHR*>(images);
-  for (std::size_t i = 0; i < sc->textures.size(); ++i)
-    gl[i].image = sc->textures[i];
-  return XR_SUCCESS;
+  });
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL AcquireSwapchainImage(XrSwapchain swapchain,
                                                      const XrSwapchainImageAcquireInfo*, uint32_t* index) {
-  LOCK;
-  Swapchain* sc = lookup<Swapchain>(handleOf(swapchain), Kind::Swapchain);
-  if (!sc)
-    return XR_ERROR_HANDLE_INVALID;
-  if (sc->acquired.size() >= sc->textures.size() - 1)
-    return XR_ERROR_CALL_ORDER_INVALID;
-  *index = sc->next;
-  sc->acquired.push_back(sc->next);
-  sc->next = (sc->next + 1) % std::uint32_t(sc->textures.size());
-  return XR_SUCCESS;
+  return checked<Swapchain>(swapchain, [&](Swapchain* sc) -> XrResult {
+    if (sc->acquired.size() >= sc->textures.size() - 1)
+      return XR_ERROR_CALL_ORDER_INVALID;
+    *index = sc->next;
+    sc->acquiredAt = runtimeNow();
+    sc->acquired.push_back(sc->next);
+    sc->next = (sc->next + 1) % std::uint32_t(sc->textures.size());
+    return XR_SUCCESS;
+  });
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL WaitSwapchainImage(XrSwapchain swapchain, const XrSwapchainImageWaitInfo*) {
-  LOCK;
-  Swapchain* sc = lookup<Swapchain>(handleOf(swapchain), Kind::Swapchain);
-  if (!sc)
-    return XR_ERROR_HANDLE_INVALID;
-  if (sc->acquired.empty() || sc->waited)
-    return XR_ERROR_CALL_ORDER_INVALID;
-  sc->waited = true;
-  return XR_SUCCESS;
+  return checked<Swapchain>(swapchain, [&](Swapchain* sc) -> XrResult {
+    if (sc->acquired.empty() || sc->waited)
+      return XR_ERROR_CALL_ORDER_INVALID;
+    sc->waited = true;
+    return XR_SUCCESS;
+  });
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL ReleaseSwapchainImage(XrSwapchain swapchain,
                                                      const XrSwapchainImageReleaseInfo*) {
-  LOCK;
-  Swapchain* sc = lookup<Swapchain>(handleOf(swapchain), Kind::Swapchain);
-  if (!sc)
-    return XR_ERROR_HANDLE_INVALID;
-  if (sc->acquired.empty() || !sc->waited)
-    return XR_ERROR_CALL_ORDER_INVALID;
-  sc->released = int(sc->acquired.front());
-  sc->acquired.pop_front();
-  sc->waited = false;
-  return XR_SUCCESS;
+  return checked<Swapchain>(swapchain, [&](Swapchain* sc) -> XrResult {
+    if (sc->acquired.empty() || !sc->waited)
+      return XR_ERROR_CALL_ORDER_INVALID;
+    if (!g_config->frameLog.empty())
+      g_gl.finish();  // the image complete, as a compositor waits for it: its drawing time is the eye's
+    sc->released = int(sc->acquired.front());
+    sc->releasedAt = runtimeNow();
+    sc->acquired.pop_front();
+    sc->waited = false;
+    return XR_SUCCESS;
+  });
 }
 
 // ---- paths and actions ----
@@ -1261,87 +1259,78 @@ bool pathWellFormed(const std::string& p) {
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL StringToPath(XrInstance instance, const char* str, XrPath* path) {
-  LOCK;
-  Instance* inst = lookup<Instance>(handleOf(instance), Kind::Instance);
-  if (!inst)
-    return XR_ERROR_HANDLE_INVALID;
-  const std::string p = str;
-  if (!pathWellFormed(p))
-    return XR_ERROR_PATH_FORMAT_INVALID;
-  const auto it = std::find(inst->paths.begin(), inst->paths.end(), p);
-  *path = XrPath(it - inst->paths.begin());
-  if (it == inst->paths.end())
-    inst->paths.push_back(p);
-  return XR_SUCCESS;
+  return checked<Instance>(instance, [&](Instance* inst) -> XrResult {
+    const std::string p = str;
+    if (!pathWellFormed(p))
+      return XR_ERROR_PATH_FORMAT_INVALID;
+    const auto it = std::find(inst->paths.begin(), inst->paths.end(), p);
+    *path = XrPath(it - inst->paths.begin());
+    if (it == inst->paths.end())
+      inst->paths.push_back(p);
+    return XR_SUCCESS;
+  });
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL PathToString(XrInstance instance, XrPath path, uint32_t capacity,
                                             uint32_t* count, char* buffer) {
-  LOCK;
-  Instance* inst = lookup<Instance>(handleOf(instance), Kind::Instance);
-  if (!inst)
-    return XR_ERROR_HANDLE_INVALID;
-  if (path == XR_NULL_PATH || path >= inst->paths.size())
-    return XR_ERROR_PATH_INVALID;
-  return copyString(inst->paths[path], capacity, count, buffer);
+  return checked<Instance>(instance, [&](Instance* inst) -> XrResult {
+    if (path == XR_NULL_PATH || path >= inst->paths.size())
+      return XR_ERROR_PATH_INVALID;
+    return copyString(inst->paths[path], capacity, count, buffer);
+  });
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL CreateActionSet(XrInstance instance, const XrActionSetCreateInfo* info,
                                                XrActionSet* set) {
-  LOCK;
-  if (!lookup<Instance>(handleOf(instance), Kind::Instance))
-    return XR_ERROR_HANDLE_INVALID;
-  if (!pathWellFormed("/" + std::string(info->actionSetName)) ||
-      std::string(info->actionSetName).find('/') != std::string::npos)
-    return XR_ERROR_PATH_FORMAT_INVALID;
-  for (const auto& [h, o] : g_objects) {
-    if (o->kind == Kind::ActionSet && static_cast<ActionSet*>(o.get())->name == info->actionSetName)
-      return XR_ERROR_NAME_DUPLICATED;
-  }
-  auto as = std::make_unique<ActionSet>();
-  as->name = info->actionSetName;
-  *set = create<ActionSet, XrActionSet>(std::move(as), handleOf(instance));
-  return XR_SUCCESS;
+  return checked<Instance>(instance, [&](Instance*) -> XrResult {
+    if (!pathWellFormed("/" + std::string(info->actionSetName)) ||
+        std::string(info->actionSetName).find('/') != std::string::npos)
+      return XR_ERROR_PATH_FORMAT_INVALID;
+    for (const auto& [h, o] : g_objects) {
+      if (o->kind == Kind::ActionSet && static_cast<ActionSet*>(o.get())->name == info->actionSetName)
+        return XR_ERROR_NAME_DUPLICATED;
+    }
+    auto as = std::make_unique<ActionSet>();
+    as->name = info->actionSetName;
+    *set = create<ActionSet, XrActionSet>(std::move(as), handleOf(instance));
+    return XR_SUCCESS;
+  });
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL DestroyActionSet(XrActionSet set) {
-  LOCK;
-  if (!lookup<ActionSet>(handleOf(set), Kind::ActionSet))
-    return XR_ERROR_HANDLE_INVALID;
-  destroyTree(handleOf(set));
-  return XR_SUCCESS;
+  return checked<ActionSet>(set, [&](ActionSet*) -> XrResult {
+    destroyTree(handleOf(set));
+    return XR_SUCCESS;
+  });
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL CreateAction(XrActionSet set, const XrActionCreateInfo* info,
                                             XrAction* action) {
-  LOCK;
-  ActionSet* as = lookup<ActionSet>(handleOf(set), Kind::ActionSet);
-  if (!as)
-    return XR_ERROR_HANDLE_INVALID;
-  if (as->attached)
-    return XR_ERROR_ACTIONSETS_ALREADY_ATTACHED;
-  if (std::string(info->actionName).find('/') != std::string::npos ||
-      !pathWellFormed("/" + std::string(info->actionName)))
-    return XR_ERROR_PATH_FORMAT_INVALID;
-  Instance* inst = instanceOf(handleOf(set));
-  auto a = std::make_unique<Action>();
-  a->type = info->actionType;
-  a->name = info->actionName;
-  for (std::uint32_t i = 0; i < info->countSubactionPaths; ++i) {
-    if (handOfPath(*inst, info->subactionPaths[i]) < 0)
-      return XR_ERROR_PATH_UNSUPPORTED;
-    a->subactions.push_back(info->subactionPaths[i]);
-  }
-  *action = create<Action, XrAction>(std::move(a), handleOf(set));
-  return XR_SUCCESS;
+  return checked<ActionSet>(set, [&](ActionSet* as) -> XrResult {
+    if (as->attached)
+      return XR_ERROR_ACTIONSETS_ALREADY_ATTACHED;
+    if (std::string(info->actionName).find('/') != std::string::npos ||
+        !pathWellFormed("/" + std::string(info->actionName)))
+      return XR_ERROR_PATH_FORMAT_INVALID;
+    Instance* inst = instanceOf(handleOf(set));
+    auto a = std::make_unique<Action>();
+    a->type = info->actionType;
+    a->name = info->actionName;
+    for (std::uint32_t i = 0; i < info->countSubactionPaths; ++i) {
+      if (handOfPath(*inst, info->subactionPaths[i]) < 0)
+        return XR_ERROR_PATH_UNSUPPORTED;
+      a->subactions.push_back(info->subactionPaths[i]);
+    }
+    *action = create<Action, XrAction>(std::move(a), handleOf(set));
+    return XR_SUCCESS;
+  });
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL DestroyAction(XrAction action) {
-  LOCK;
-  if (!lookup<Action>(handleOf(action), Kind::Action))
-    return XR_ERROR_HANDLE_INVALID;
-  destroyTree(handleOf(action));
-  return XR_SUCCESS;
+  return checked<Action>(action, [&](Action*) -> XrResult {
+    destroyTree(handleOf(action));
+    return XR_SUCCESS;
+  });
 }
 
 /// the input components of the profiles the runtime knows, per hand (without /user/hand/X)
@@ -1362,101 +1351,93 @@ const std::map<std::string, std::set<std::string>>& profiles() {
 
 XRAPI_ATTR XrResult XRAPI_CALL
 SuggestInteractionProfileBindings(XrInstance instance, const XrInteractionProfileSuggestedBinding* s) {
-  LOCK;
-  Instance* inst = lookup<Instance>(handleOf(instance), Kind::Instance);
-  if (!inst)
-    return XR_ERROR_HANDLE_INVALID;
-  if (s->interactionProfile == XR_NULL_PATH || s->interactionProfile >= inst->paths.size())
-    return XR_ERROR_PATH_INVALID;
-  const std::string profile = inst->paths[s->interactionProfile];
-  const auto it = profiles().find(profile);
-  if (it == profiles().end())
-    return XR_ERROR_PATH_UNSUPPORTED;
-  std::map<std::uint64_t, std::vector<std::string>> bound;
-  for (std::uint32_t i = 0; i < s->countSuggestedBindings; ++i) {
-    const XrActionSuggestedBinding& b = s->suggestedBindings[i];
-    Action* a = lookup<Action>(handleOf(b.action), Kind::Action);
-    if (!a)
-      return XR_ERROR_HANDLE_INVALID;
-    if (lookup<ActionSet>(a->parent, Kind::ActionSet)->attached)
-      return XR_ERROR_ACTIONSETS_ALREADY_ATTACHED;
-    if (b.binding == XR_NULL_PATH || b.binding >= inst->paths.size())
+  return checked<Instance>(instance, [&](Instance* inst) -> XrResult {
+    if (s->interactionProfile == XR_NULL_PATH || s->interactionProfile >= inst->paths.size())
       return XR_ERROR_PATH_INVALID;
-    const std::string path = inst->paths[b.binding];
-    std::string component;
-    for (const char* user : {"/user/hand/left", "/user/hand/right"}) {
-      if (path.rfind(user, 0) == 0)
-        component = path.substr(std::strlen(user));
-    }
-    if (component.empty() || !it->second.count(component))
+    const std::string profile = inst->paths[s->interactionProfile];
+    const auto it = profiles().find(profile);
+    if (it == profiles().end())
       return XR_ERROR_PATH_UNSUPPORTED;
-    bound[handleOf(b.action)].push_back(path);
-  }
-  for (auto& [h, paths] : bound)
-    lookup<Action>(h, Kind::Action)->bindings[profile] = paths;
-  return XR_SUCCESS;
+    std::map<std::uint64_t, std::vector<std::string>> bound;
+    for (std::uint32_t i = 0; i < s->countSuggestedBindings; ++i) {
+      const XrActionSuggestedBinding& b = s->suggestedBindings[i];
+      Action* a = lookup<Action>(handleOf(b.action), Kind::Action);
+      if (!a)
+        return XR_ERROR_HANDLE_INVALID;
+      if (lookup<ActionSet>(a->parent, Kind::ActionSet)->attached)
+        return XR_ERROR_ACTIONSETS_ALREADY_ATTACHED;
+      if (b.binding == XR_NULL_PATH || b.binding >= inst->paths.size())
+        return XR_ERROR_PATH_INVALID;
+      const std::string path = inst->paths[b.binding];
+      std::string component;
+      for (const char* user : {"/user/hand/left", "/user/hand/right"}) {
+        if (path.rfind(user, 0) == 0)
+          component = path.substr(std::strlen(user));
+      }
+      if (component.empty() || !it->second.count(component))
+        return XR_ERROR_PATH_UNSUPPORTED;
+      bound[handleOf(b.action)].push_back(path);
+    }
+    for (auto& [h, paths] : bound)
+      lookup<Action>(h, Kind::Action)->bindings[profile] = paths;
+    return XR_SUCCESS;
+  });
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL AttachSessionActionSets(XrSession session,
                                                        const XrSessionActionSetsAttachInfo* info) {
-  LOCK;
-  Session* s = lookup<Session>(handleOf(session), Kind::Session);
-  if (!s)
-    return XR_ERROR_HANDLE_INVALID;
-  if (s->attached)
-    return XR_ERROR_ACTIONSETS_ALREADY_ATTACHED;
-  for (std::uint32_t i = 0; i < info->countActionSets; ++i) {
-    ActionSet* as = lookup<ActionSet>(handleOf(info->actionSets[i]), Kind::ActionSet);
-    if (!as)
-      return XR_ERROR_HANDLE_INVALID;
-  }
-  for (std::uint32_t i = 0; i < info->countActionSets; ++i) {
-    lookup<ActionSet>(handleOf(info->actionSets[i]), Kind::ActionSet)->attached = true;
-    s->actionSets.insert(handleOf(info->actionSets[i]));
-  }
-  s->attached = true;
-  // the controllers are there from the start: the interaction profile is current at once
-  Instance* inst = instanceOf(handleOf(session));
-  XrEventDataBuffer buffer{};
-  auto* e = reinterpret_cast<XrEventDataInteractionProfileChanged*>(&buffer);
-  e->type = XR_TYPE_EVENT_DATA_INTERACTION_PROFILE_CHANGED;
-  e->session = session;
-  inst->events.push_back(buffer);
-  return XR_SUCCESS;
+  return checked<Session>(session, [&](Session* s) -> XrResult {
+    if (s->attached)
+      return XR_ERROR_ACTIONSETS_ALREADY_ATTACHED;
+    for (std::uint32_t i = 0; i < info->countActionSets; ++i) {
+      ActionSet* as = lookup<ActionSet>(handleOf(info->actionSets[i]), Kind::ActionSet);
+      if (!as)
+        return XR_ERROR_HANDLE_INVALID;
+    }
+    for (std::uint32_t i = 0; i < info->countActionSets; ++i) {
+      lookup<ActionSet>(handleOf(info->actionSets[i]), Kind::ActionSet)->attached = true;
+      s->actionSets.insert(handleOf(info->actionSets[i]));
+    }
+    s->attached = true;
+    // the controllers are there from the start: the interaction profile is current at once
+    Instance* inst = instanceOf(handleOf(session));
+    XrEventDataBuffer buffer{};
+    auto* e = reinterpret_cast<XrEventDataInteractionProfileChanged*>(&buffer);
+    e->type = XR_TYPE_EVENT_DATA_INTERACTION_PROFILE_CHANGED;
+    e->session = session;
+    inst->events.push_back(buffer);
+    return XR_SUCCESS;
+  });
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL GetCurrentInteractionProfile(XrSession session, XrPath topLevelUserPath,
                                                             XrInteractionProfileState* state) {
-  LOCK;
-  Session* s = lookup<Session>(handleOf(session), Kind::Session);
-  if (!s)
-    return XR_ERROR_HANDLE_INVALID;
-  if (!s->attached)
-    return XR_ERROR_ACTIONSET_NOT_ATTACHED;
-  Instance* inst = instanceOf(handleOf(session));
-  if (handOfPath(*inst, topLevelUserPath) < 0)
-    return XR_ERROR_PATH_UNSUPPORTED;
-  XrPath p = XR_NULL_PATH;
-  StringToPath(reinterpret_cast<XrInstance>(std::uintptr_t(s->parent)), g_config->profile.c_str(), &p);
-  state->interactionProfile = p;
-  return XR_SUCCESS;
+  return checked<Session>(session, [&](Session* s) -> XrResult {
+    if (!s->attached)
+      return XR_ERROR_ACTIONSET_NOT_ATTACHED;
+    Instance* inst = instanceOf(handleOf(session));
+    if (handOfPath(*inst, topLevelUserPath) < 0)
+      return XR_ERROR_PATH_UNSUPPORTED;
+    XrPath p = XR_NULL_PATH;
+    StringToPath(reinterpret_cast<XrInstance>(std::uintptr_t(s->parent)), g_config->profile.c_str(), &p);
+    state->interactionProfile = p;
+    return XR_SUCCESS;
+  });
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL SyncActions(XrSession session, const XrActionsSyncInfo* info) {
-  LOCK;
-  Session* s = lookup<Session>(handleOf(session), Kind::Session);
-  if (!s)
-    return XR_ERROR_HANDLE_INVALID;
-  for (std::uint32_t i = 0; i < info->countActiveActionSets; ++i) {
-    const std::uint64_t h = handleOf(info->activeActionSets[i].actionSet);
-    if (!lookup<ActionSet>(h, Kind::ActionSet))
-      return XR_ERROR_HANDLE_INVALID;
-    if (!s->actionSets.count(h))
-      return XR_ERROR_ACTIONSET_NOT_ATTACHED;
-  }
-  if (s->state != XR_SESSION_STATE_FOCUSED)
-    return XR_SESSION_NOT_FOCUSED;
-  return XR_SUCCESS;
+  return checked<Session>(session, [&](Session* s) -> XrResult {
+    for (std::uint32_t i = 0; i < info->countActiveActionSets; ++i) {
+      const std::uint64_t h = handleOf(info->activeActionSets[i].actionSet);
+      if (!lookup<ActionSet>(h, Kind::ActionSet))
+        return XR_ERROR_HANDLE_INVALID;
+      if (!s->actionSets.count(h))
+        return XR_ERROR_ACTIONSET_NOT_ATTACHED;
+    }
+    if (s->state != XR_SESSION_STATE_FOCUSED)
+      return XR_SESSION_NOT_FOCUSED;
+    return XR_SUCCESS;
+  });
 }
 
 /// the value of `component` ("/input/trigger/value") of controller `hand`, and whether it is active
@@ -1548,33 +1529,31 @@ XRAPI_ATTR XrResult XRAPI_CALL GetActionStateFloat(XrSession session, const XrAc
 
 XRAPI_ATTR XrResult XRAPI_CALL GetActionStatePose(XrSession session, const XrActionStateGetInfo* info,
                                                   XrActionStatePose* state) {
-  LOCK;
-  Session* s = lookup<Session>(handleOf(session), Kind::Session);
-  if (!s)
-    return XR_ERROR_HANDLE_INVALID;
-  Action* a = lookup<Action>(handleOf(info->action), Kind::Action);
-  if (!a)
-    return XR_ERROR_HANDLE_INVALID;
-  if (a->type != XR_ACTION_TYPE_POSE_INPUT)
-    return XR_ERROR_ACTION_TYPE_MISMATCH;
-  if (!s->actionSets.count(a->parent))
-    return XR_ERROR_ACTIONSET_NOT_ATTACHED;
-  int hand = -1;
-  if (info->subactionPath != XR_NULL_PATH) {
-    if (std::find(a->subactions.begin(), a->subactions.end(), info->subactionPath) == a->subactions.end())
-      return XR_ERROR_PATH_UNSUPPORTED;
-    hand = handOfPath(*instanceOf(handleOf(session)), info->subactionPath);
-  }
-  const auto it = a->bindings.find(g_config->profile);
-  bool active = false;
-  if (it != a->bindings.end() && s->state == XR_SESSION_STATE_FOCUSED) {
-    for (const std::string& path : it->second) {
-      const int h = path.rfind("/user/hand/left", 0) == 0 ? 0 : 1;
-      active |= (hand < 0 || h == hand) && !s->lost[h];
+  return checked<Session>(session, [&](Session* s) -> XrResult {
+    Action* a = lookup<Action>(handleOf(info->action), Kind::Action);
+    if (!a)
+      return XR_ERROR_HANDLE_INVALID;
+    if (a->type != XR_ACTION_TYPE_POSE_INPUT)
+      return XR_ERROR_ACTION_TYPE_MISMATCH;
+    if (!s->actionSets.count(a->parent))
+      return XR_ERROR_ACTIONSET_NOT_ATTACHED;
+    int hand = -1;
+    if (info->subactionPath != XR_NULL_PATH) {
+      if (std::find(a->subactions.begin(), a->subactions.end(), info->subactionPath) == a->subactions.end())
+        return XR_ERROR_PATH_UNSUPPORTED;
+      hand = handOfPath(*instanceOf(handleOf(session)), info->subactionPath);
     }
-  }
-  state->isActive = active ? XR_TRUE : XR_FALSE;
-  return XR_SUCCESS;
+    const auto it = a->bindings.find(g_config->profile);
+    bool active = false;
+    if (it != a->bindings.end() && s->state == XR_SESSION_STATE_FOCUSED) {
+      for (const std::string& path : it->second) {
+        const int h = path.rfind("/user/hand/left", 0) == 0 ? 0 : 1;
+        active |= (hand < 0 || h == hand) && !s->lost[h];
+      }
+    }
+    state->isActive = active ? XR_TRUE : XR_FALSE;
+    return XR_SUCCESS;
+  });
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL GetActionStateVector2f(XrSession session, const XrActionStateGetInfo* info,
@@ -1592,84 +1571,79 @@ XRAPI_ATTR XrResult XRAPI_CALL GetActionStateVector2f(XrSession session, const X
 
 XRAPI_ATTR XrResult XRAPI_CALL ApplyHapticFeedback(XrSession session, const XrHapticActionInfo* info,
                                                    const XrHapticBaseHeader*) {
-  LOCK;
-  if (!lookup<Session>(handleOf(session), Kind::Session))
-    return XR_ERROR_HANDLE_INVALID;
-  Action* a = lookup<Action>(handleOf(info->action), Kind::Action);
-  if (!a)
-    return XR_ERROR_HANDLE_INVALID;
-  return a->type == XR_ACTION_TYPE_VIBRATION_OUTPUT ? XR_SUCCESS : XR_ERROR_ACTION_TYPE_MISMATCH;
+  return checked<Session>(session, [&](Session*) -> XrResult {
+    Action* a = lookup<Action>(handleOf(info->action), Kind::Action);
+    if (!a)
+      return XR_ERROR_HANDLE_INVALID;
+    return a->type == XR_ACTION_TYPE_VIBRATION_OUTPUT ? XR_SUCCESS : XR_ERROR_ACTION_TYPE_MISMATCH;
+  });
 }
 
 // ---- hand tracking ----
 
 XRAPI_ATTR XrResult XRAPI_CALL CreateHandTrackerEXT(XrSession session, const XrHandTrackerCreateInfoEXT* info,
                                                     XrHandTrackerEXT* tracker) {
-  LOCK;
-  if (!lookup<Session>(handleOf(session), Kind::Session))
-    return XR_ERROR_HANDLE_INVALID;
-  Instance* inst = instanceOf(handleOf(session));
-  if (!inst->handExt)
-    return XR_ERROR_FUNCTION_UNSUPPORTED;
-  if (!g_config->handTracking)
-    return XR_ERROR_FEATURE_UNSUPPORTED;
-  if (info->hand != XR_HAND_LEFT_EXT && info->hand != XR_HAND_RIGHT_EXT)
-    return XR_ERROR_VALIDATION_FAILURE;
-  if (info->handJointSet != XR_HAND_JOINT_SET_DEFAULT_EXT)
-    return XR_ERROR_VALIDATION_FAILURE;
-  auto t = std::make_unique<HandTracker>();
-  t->hand = info->hand == XR_HAND_LEFT_EXT ? 0 : 1;
-  *tracker = create<HandTracker, XrHandTrackerEXT>(std::move(t), handleOf(session));
-  return XR_SUCCESS;
+  return checked<Session>(session, [&](Session*) -> XrResult {
+    Instance* inst = instanceOf(handleOf(session));
+    if (!inst->handExt)
+      return XR_ERROR_FUNCTION_UNSUPPORTED;
+    if (!g_config->handTracking)
+      return XR_ERROR_FEATURE_UNSUPPORTED;
+    if (info->hand != XR_HAND_LEFT_EXT && info->hand != XR_HAND_RIGHT_EXT)
+      return XR_ERROR_VALIDATION_FAILURE;
+    if (info->handJointSet != XR_HAND_JOINT_SET_DEFAULT_EXT)
+      return XR_ERROR_VALIDATION_FAILURE;
+    auto t = std::make_unique<HandTracker>();
+    t->hand = info->hand == XR_HAND_LEFT_EXT ? 0 : 1;
+    *tracker = create<HandTracker, XrHandTrackerEXT>(std::move(t), handleOf(session));
+    return XR_SUCCESS;
+  });
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL DestroyHandTrackerEXT(XrHandTrackerEXT tracker) {
-  LOCK;
-  if (!lookup<HandTracker>(handleOf(tracker), Kind::HandTracker))
-    return XR_ERROR_HANDLE_INVALID;
-  destroyTree(handleOf(tracker));
-  return XR_SUCCESS;
+  return checked<HandTracker>(tracker, [&](HandTracker*) -> XrResult {
+    destroyTree(handleOf(tracker));
+    return XR_SUCCESS;
+  });
 }
 
 XRAPI_ATTR XrResult XRAPI_CALL LocateHandJointsEXT(XrHandTrackerEXT tracker,
                                                    const XrHandJointsLocateInfoEXT* info,
                                                    XrHandJointLocationsEXT* locations) {
-  LOCK;
-  HandTracker* t = lookup<HandTracker>(handleOf(tracker), Kind::HandTracker);
-  if (!t)
-    return XR_ERROR_HANDLE_INVALID;
-  Space* base = lookup<Space>(handleOf(info->baseSpace), Kind::Space);
-  if (!base)
-    return XR_ERROR_HANDLE_INVALID;
-  if (info->time <= 0)
-    return XR_ERROR_TIME_INVALID;
-  if (locations->jointCount != XR_HAND_JOINT_COUNT_EXT)
-    return XR_ERROR_VALIDATION_FAILURE;
-  Session* s = lookup<Session>(t->parent, Kind::Session);
-  XrHandJointVelocitiesEXT* velocities = nullptr;
-  for (auto* next = reinterpret_cast<XrBaseOutStructure*>(locations->next); next; next = next->next) {
-    if (next->type == XR_TYPE_HAND_JOINT_VELOCITIES_EXT)
-      velocities = reinterpret_cast<XrHandJointVelocitiesEXT*>(next);
-  }
-  Pose baseInStage;
-  const JointSample j = sampleJoints(g_joints, t->hand, sessionSeconds(*s, info->time));
-  const bool active = j.valid && !s->lost[t->hand] && spaceInStage(*s, *base, info->time, baseInStage) &&
-                      s->state == XR_SESSION_STATE_FOCUSED;
-  locations->isActive = active ? XR_TRUE : XR_FALSE;
-  for (std::uint32_t k = 0; k < XR_HAND_JOINT_COUNT_EXT; ++k) {
-    XrHandJointLocationEXT& loc = locations->jointLocations[k];
-    if (!active) {
-      loc.locationFlags = 0;
-      continue;
+  return checked<HandTracker>(tracker, [&](HandTracker* t) -> XrResult {
+    Space* base = lookup<Space>(handleOf(info->baseSpace), Kind::Space);
+    if (!base)
+      return XR_ERROR_HANDLE_INVALID;
+    if (info->time <= 0)
+      return XR_ERROR_TIME_INVALID;
+    if (locations->jointCount != XR_HAND_JOINT_COUNT_EXT)
+      return XR_ERROR_VALIDATION_FAILURE;
+    Session* s = lookup<Session>(t->parent, Kind::Session);
+    XrHandJointVelocitiesEXT* velocities = nullptr;
+    for (auto* next = reinterpret_cast<XrBaseOutStructure*>(locations->next); next; next = next->next) {
+      if (next->type == XR_TYPE_HAND_JOINT_VELOCITIES_EXT)
+        velocities = reinterpret_cast<XrHandJointVelocitiesEXT*>(next);
     }
-    loc.pose = toXr(baseInStage.inverse() * j.pose[k]);
-    loc.radius = float(j.radius[k]);
-    loc.locationFlags = XR_SPACE_LOCATION_ORIENTATION_VALID_BIT | XR_SPACE_LOCATION_POSITION_VALID_BIT |
-                        XR_SPACE_LOCATION_ORIENTATION_TRACKED_BIT | XR_SPACE_LOCATION_POSITION_TRACKED_BIT;
-    if (velocities && velocities->jointCount == XR_HAND_JOINT_COUNT_EXT)
-      velocities->jointVelocities[k].velocityFlags = 0;  // no velocities: the app differentiates the poses
-  }
-  return XR_SUCCESS;
+    Pose baseInStage;
+    const JointSample j = sampleJoints(g_joints, t->hand, sessionSeconds(*s, info->time));
+    const bool active = j.valid && !s->lost[t->hand] && spaceInStage(*s, *base, info->time, baseInStage) &&
+                        s->state == XR_SESSION_STATE_FOCUSED;
+    locations->isActive = active ? XR_TRUE : XR_FALSE;
+    for (std::uint32_t k = 0; k < XR_HAND_JOINT_COUNT_EXT; ++k) {
+      XrHandJointLocationEXT& loc = locations->jointLocations[k];
+      if (!active) {
+        loc.locationFlags = 0;
+        continue;
+      }
+      loc.pose = toXr(baseInStage.inverse() * j.pose[k]);
+      loc.radius = float(j.radius[k]);
+      loc.locationFlags = XR_SPACE_LOCATION_ORIENTATION_VALID_BIT | XR_SPACE_LOCATION_POSITION_VALID_BIT |
+                          XR_SPACE_LOCATION_ORIENTATION_TRACKED_BIT | XR_SPACE_LOCATION_POSITION_TRACKED_BIT;
+      if (velocities && velocities->jointCount == XR_HAND_JOINT_COUNT_EXT)
+        velocities->jointVelocities[k].velocityFlags = 0;  // no velocities: the app differentiates the poses
+    }
+    return XR_SUCCESS;
+  });
 }
 
 // ---- dispatch ----
