@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "engine/tracked_hands.h"
 #include "input/joint_hand.h"
 #include "input/joint_track.h"
 #include "render/camera.h"
@@ -218,6 +219,73 @@ TEST(JointTrack, MalformedFilesNameTheLine) {
   expectError(header + "0,left,palm,1,0,0,x,1,0,0,0,0.01\n", ":2: column 7: bad number");
   expectError(header + "0,left,palm,1,0,0,0,1,0,0,0,0.01\n", "left hand has 1 of 26 joints");
   std::filesystem::remove(path);
+}
+
+TEST(JointTrack, PutReplacesTheLastFrameOfTheSameTimeAndRecordedTimesSampleExactly) {
+  input::JointTrack track;
+  track.put(frameAt(0.0, false));
+  track.put(frameAt(0.0, true));  // the same instant again: the later input wins
+  track.put(frameAt(0.1, true));
+  ASSERT_EQ(track.frames().size(), 2u);
+  EXPECT_TRUE(track.frames()[0].hands[1].valid);
+  EXPECT_THROW(track.put(frameAt(0.05, true)), sim::InputError);
+  // between two recorded frames slerp and renormalisation could move the last bits: a recorded instant comes
+  // back as recorded
+  track.put(frameAt(0.2, true));
+  const input::JointFrame at = track.sample(0.1);
+  for (int h = 0; h < 2; ++h) {
+    for (int j = 0; j < input::kHandJoints; ++j) {
+      EXPECT_EQ(at.hands[h].joint[j].orientation.coeffs(),
+                track.frames()[1].hands[h].joint[j].orientation.coeffs());
+      EXPECT_EQ(at.hands[h].joint[j].position, track.frames()[1].hands[h].joint[j].position);
+    }
+  }
+}
+
+TEST(JointReplay, HandScriptsAreToldApartByTheirHeader) {
+  const auto dir = std::filesystem::temp_directory_path();
+  const std::string pose = (dir / "fp_script_pose.csv").string(),
+                    joints = (dir / "fp_script_joints.csv").string(),
+                    bad = (dir / "fp_script_bad.csv").string();
+  std::ofstream(pose) << "time,px,py,pz,qw,qx,qy,qz,grip\n0,0,0.3,0,1,0,0,0,0\n";
+  input::JointTrack track;
+  track.add(frameAt(0.0, false));
+  track.add(frameAt(0.1, true));
+  track.save(joints);
+  std::ofstream(bad) << input::JointTrack::header()
+                     << "\n0,left,palm,1,0,0,0,1,0,0,0,0.01\n0,left,knee,1,0,0,0,1,0,0,0,0.01\n";
+  EXPECT_FALSE(engine::JointReplay::ofScript(pose).has_value());
+  EXPECT_FALSE(engine::JointReplay::ofScript("").has_value());
+  const auto replay = engine::JointReplay::ofScript(joints);
+  ASSERT_TRUE(replay.has_value());
+  // the first frame's tracked hands size the hands: the left one here, the right one is not tracked
+  EXPECT_TRUE(replay->first()[0].has_value());
+  EXPECT_FALSE(replay->first()[1].has_value());
+  try {
+    engine::JointReplay::ofScript(bad);
+    FAIL() << "no error for a malformed joint recording";
+  } catch (const sim::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("fp_script_bad.csv:3: column 3: unknown joint"), std::string::npos)
+        << e.what();
+  }
+  for (const std::string& f : {pose, joints, bad})
+    std::filesystem::remove(f);
+}
+
+TEST(TrackedHands, ReferencesAreTheTrackedHandsOrTheModelAtTheirSize) {
+  sim::SceneDesc scene;
+  scene.domain = sim::Aabb(Vec3d(-0.3, 0.0, -0.2), Vec3d(0.3, 0.4, 0.2));
+  HandPose p = somePose();
+  const input::HandJoints big = input::jointsOfHandPose(HandModel(1.5), p, HandSide::Right);
+  engine::TrackedJoints first;
+  first[1] = big;
+  const auto refs = engine::trackedHandReferences(scene, first, 0.8);
+  ASSERT_EQ(refs.size(), 2u);
+  EXPECT_EQ(refs[0].first, HandSide::Left);
+  EXPECT_EQ(refs[1].second.joint[15].position, big.joint[15].position);  // the tracked hand itself
+  // the untracked left hand: the model at the tracked hand's size, not at --hand-size 0.8
+  EXPECT_NEAR(input::trackedHandScale(refs[0].second), 1.5, 1e-9);
+  EXPECT_NEAR(input::trackedHandScale(engine::trackedHandReferences(scene, {}, 0.8)[0].second), 0.8, 1e-9);
 }
 
 std::array<input::PartPose, HandModel::kParts> partsAt(const Vec3d& at) {
