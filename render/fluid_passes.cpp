@@ -160,27 +160,92 @@ void FluidRenderer::Impl::drawDepth(const ViewParams& v) {
   }
 }
 
+void FluidRenderer::Impl::blurThickness(const ViewParams& v) {
+  const RenderSettings& s = *v.settings;
+  if (s.thicknessBlur <= 0.0f || !particleCount)
+    return;
+  glDisable(GL_DEPTH_TEST);
+  glViewport(0, 0, halfWidth, halfHeight);
+  thicknessBlur.use();
+  thicknessBlur.set("uThickness", 0);
+  thicknessBlur.set("uDepth", 1);
+  thicknessBlur.set("uPixelsPerMetre", 0.5f * v.projection(1, 1) * 0.5f * float(height));
+  thicknessBlur.set("uBlur", s.thicknessBlur);
+  thicknessBlur.set("uFineRadius", fineRadius);
+  thicknessBlur.set("uMaxTaps", 8);
+  const GLint direction = glGetUniformLocation(thicknessBlur.id(), "uDirection");
+  glActiveTexture(GL_TEXTURE1);
+  glBindTexture(GL_TEXTURE_2D, fluidDepth[0].id);
+  glActiveTexture(GL_TEXTURE0);
+  glBindVertexArray(emptyVao.id);
+  const GLuint from[2] = {thickness.id, thicknessTmp.id};
+  const GLuint into[2] = {thicknessTmpFbo.id, thicknessFbo.id};
+  for (int dir = 0; dir < 2; ++dir) {
+    glBindFramebuffer(GL_FRAMEBUFFER, into[dir]);
+    glBindTexture(GL_TEXTURE_2D, from[dir]);
+    glUniform2i(direction, dir == 0 ? 1 : 0, dir == 0 ? 0 : 1);
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+  }
+  glViewport(0, 0, width, height);
+}
+
 void FluidRenderer::Impl::filterDepth(const ViewParams& v) {
   const RenderSettings& s = *v.settings;
+  surface = 0;
+  if (s.filterIterations <= 0)
+    return;
+  const bool half = s.filterHalfResolution;
+  const float scale = half ? 0.5f : 1.0f;
   glDisable(GL_DEPTH_TEST);
+  glActiveTexture(GL_TEXTURE0);
+  glBindVertexArray(emptyVao.id);
+  Framebuffer* fbo = filterFbo;
+  Texture* tex = fluidDepth;
+  if (half) {
+    // the sphere depth reduced to half resolution
+    glViewport(0, 0, halfWidth, halfHeight);
+    depthDown.use();
+    depthDown.set("uDepth", 0);
+    depthDown.set("uRange", s.filterRange);
+    depthDown.set("uFineRadius", fineRadius);
+    glBindFramebuffer(GL_FRAMEBUFFER, halfFbo[0].id);
+    glBindTexture(GL_TEXTURE_2D, fluidDepth[0].id);
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+    fbo = halfFbo;
+    tex = halfDepth;
+  }
   filter.use();
   filter.set("uDepth", 0);
-  filter.set("uPixelsPerMetre", v.projection(1, 1) * 0.5f * float(height));
+  filter.set("uPixelsPerMetre", scale * v.projection(1, 1) * 0.5f * float(height));
   filter.set("uRadius", s.filterRadius);
   filter.set("uFineRadius", fineRadius);
   filter.set("uMaxTaps", s.filterMaxTaps);
-  filter.set("uMaxPixels", s.filterMaxPixels);
+  filter.set("uMaxPixels", scale * s.filterMaxPixels);
   filter.set("uRange", s.filterRange);
-  glActiveTexture(GL_TEXTURE0);
-  glBindVertexArray(emptyVao.id);
   const GLint direction = glGetUniformLocation(filter.id(), "uDirection");
   for (int it = 0; it < s.filterIterations; ++it) {
     for (int dir = 0; dir < 2; ++dir) {
-      glBindFramebuffer(GL_FRAMEBUFFER, filterFbo[1 - dir].id);
-      glBindTexture(GL_TEXTURE_2D, fluidDepth[dir].id);
+      glBindFramebuffer(GL_FRAMEBUFFER, fbo[1 - dir].id);
+      glBindTexture(GL_TEXTURE_2D, tex[dir].id);
       glUniform2i(direction, dir == 0 ? 1 : 0, dir == 0 ? 0 : 1);
       glDrawArrays(GL_TRIANGLES, 0, 3);
     }
+  }
+  if (half) {
+    // back to full resolution inside the full-resolution outline, into fluidDepth[1]
+    glViewport(0, 0, width, height);
+    depthUp.use();
+    depthUp.set("uDepth", 0);
+    depthUp.set("uFiltered", 1);
+    depthUp.set("uRange", s.filterRange);
+    depthUp.set("uFineRadius", fineRadius);
+    glBindFramebuffer(GL_FRAMEBUFFER, filterFbo[1].id);
+    glBindTexture(GL_TEXTURE_2D, fluidDepth[0].id);
+    glActiveTexture(GL_TEXTURE1);
+    glBindTexture(GL_TEXTURE_2D, halfDepth[0].id);
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+    glActiveTexture(GL_TEXTURE0);
+    surface = 1;
   }
 }
 
@@ -195,7 +260,7 @@ void FluidRenderer::Impl::drawComposite(const ViewParams& v) {
   composite.set("uAbsorption", s.absorption);
   composite.set("uRefraction", s.refraction);
   composite.set("uHighlightDensity", s.highlightStrength / std::max(maxRadius, 1e-6f));
-  const GLuint inputs[4] = {sceneColor.id, sceneDepth.id, fluidDepth[0].id, thickness.id};
+  const GLuint inputs[4] = {sceneColor.id, sceneDepth.id, fluidDepth[surface].id, thickness.id};
   const char* names[4] = {"uSceneColor", "uSceneDepth", "uFluidDepth", "uThickness"};
   for (int k = 0; k < 4; ++k) {
     glActiveTexture(GLenum(GL_TEXTURE0 + k));
@@ -227,7 +292,7 @@ void FluidRenderer::Impl::drawOverlay(const ViewParams& v) {
     glBlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
     glDepthMask(GL_FALSE);
     glActiveTexture(GL_TEXTURE0);
-    glBindTexture(GL_TEXTURE_2D, fluidDepth[0].id);
+    glBindTexture(GL_TEXTURE_2D, fluidDepth[surface].id);
     spray.use();
     spray.set("uFluidDepth", 0);
     spray.set("uInvView", v.invView);

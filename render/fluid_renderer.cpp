@@ -60,6 +60,9 @@ FluidRenderer::Impl::Impl(const std::string& dir)
       sphereColor(dir, "sphere.vert", "sphere_color.frag"),
       spray(dir, "sphere.vert", "spray.frag"),
       filter(dir, "fullscreen.vert", "depth_filter.frag"),
+      depthDown(dir, "fullscreen.vert", "depth_down.frag"),
+      depthUp(dir, "fullscreen.vert", "depth_up.frag"),
+      thicknessBlur(dir, "fullscreen.vert", "thickness_blur.frag"),
       composite(dir, "fullscreen.vert", "fluid_composite.frag"),
       overlay(dir, "overlay.vert", "overlay.frag") {
   sphereAttributes(particleVao, particleVbo);
@@ -88,6 +91,9 @@ void FluidRenderer::Impl::resize(int w, int h) {
   halfWidth = (w + 1) / 2;
   halfHeight = (h + 1) / 2;
   thickness.create(GL_RG16F, halfWidth, halfHeight, GL_RG, GL_FLOAT, GL_LINEAR);
+  thicknessTmp.create(GL_RG16F, halfWidth, halfHeight, GL_RG, GL_FLOAT, GL_LINEAR);
+  for (Texture& t : halfDepth)
+    t.create(GL_RG32F, halfWidth, halfHeight, GL_RG, GL_FLOAT, GL_NEAREST);
   finalColor.create(GL_RGBA8, w, h, GL_RGBA, GL_UNSIGNED_BYTE, GL_NEAREST);
   finalDepth.create(GL_DEPTH_COMPONENT32F, w, h, GL_DEPTH_COMPONENT, GL_FLOAT, GL_NEAREST);
   sceneFbo.build(sceneColor, &sceneDepth, "scene");
@@ -95,8 +101,11 @@ void FluidRenderer::Impl::resize(int w, int h) {
   depthFbo.build(fluidDepth[0], &sceneDepth, "fluid depth");
   filterFbo[0].build(fluidDepth[0], nullptr, "filter 0");
   filterFbo[1].build(fluidDepth[1], nullptr, "filter 1");
+  halfFbo[0].build(halfDepth[0], nullptr, "half filter 0");
+  halfFbo[1].build(halfDepth[1], nullptr, "half filter 1");
   // the thickness pass samples the scene's depth instead of testing against it (other size)
   thicknessFbo.build(thickness, nullptr, "thickness");
+  thicknessTmpFbo.build(thicknessTmp, nullptr, "thickness blur");
   finalFbo.build(finalColor, &finalDepth, "final");
 }
 
@@ -208,7 +217,7 @@ std::size_t FluidRenderer::particleCount() const {
 std::vector<float> FluidRenderer::readSurfaceDepth() const {
   const Impl& r = *m_impl;
   std::vector<float> rg(std::size_t(r.width) * std::size_t(r.height) * 2);
-  glBindFramebuffer(GL_READ_FRAMEBUFFER, r.filterFbo[0].id);
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, r.filterFbo[r.surface].id);
   glPixelStorei(GL_PACK_ALIGNMENT, 4);
   glReadPixels(0, 0, r.width, r.height, GL_RG, GL_FLOAT, rg.data());
   glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
@@ -311,6 +320,7 @@ void FluidRenderer::renderView(const Mat4& view, const Mat4& projection, const R
     mark(m_times.thickness);
     r.drawDepth(v);
     mark(m_times.depth);
+    r.blurThickness(v);
     r.filterDepth(v);
     mark(m_times.filter);
     r.drawComposite(v);

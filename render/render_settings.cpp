@@ -31,6 +31,11 @@ RenderSettingsTable::RenderSettingsTable() : sim::ParamTableOf<RenderSettings>("
       &R::filterMaxPixels, 64.0f);
   add("filter_range", "water", "r", 0.1, 20.0, true, "depth range kept by the filter in fine particle radii",
       &R::filterRange, 15.0f);
+  add("filter_half_resolution", "water", "-", 0, 1, true,
+      "filter the depth at half resolution (cheaper, smoother at high resolution)", &R::filterHalfResolution,
+      true);
+  add("thickness_blur", "water", "r", 0.0, 20.0, true,
+      "sigma of the thickness blur in fine particle radii (0: off)", &R::thicknessBlur, 3.0f);
   add("refraction", "water", "-", 0.0, 1.0, true,
       "screen-space refraction offset at full thickness (view units)", &R::refraction, 0.04f);
 }

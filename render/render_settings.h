@@ -18,18 +18,20 @@ struct RenderSettings {
   RenderSettings();
 
   enum class View { Fluid, Particles };
-  View view;                ///< screen-space water, or coloured spheres for inspection
-  ColorField colorField;    ///< the quantity of the particle view
-  bool highlightSplits;     ///< tint split children red
-  float highlightDuration;  ///< how long after its split a child is tinted [s], > 0
-  float highlightStrength;  ///< red density of a fresh child, per particle radius of thickness
-  bool showSpray;           ///< draw splash particles
-  bool showColliders;       ///< draw floor, container and bodies
-  int filterIterations;     ///< narrow-range filter passes (each horizontal + vertical), >= 0
-  float filterRadius;       ///< filter half-width in fine particle radii, > 0
-  float filterMaxPixels;    ///< cap on the filter half-width [px]
-  float filterRange;        ///< depth range kept by the filter, in fine particle radii
-  float refraction;         ///< screen-space refraction offset at full thickness [view units]
+  View view;                  ///< screen-space water, or coloured spheres for inspection
+  ColorField colorField;      ///< the quantity of the particle view
+  bool highlightSplits;       ///< tint split children red
+  float highlightDuration;    ///< how long after its split a child is tinted [s], > 0
+  float highlightStrength;    ///< red density of a fresh child, per particle radius of thickness
+  bool showSpray;             ///< draw splash particles
+  bool showColliders;         ///< draw floor, container and bodies
+  int filterIterations;       ///< narrow-range filter passes (each horizontal + vertical), >= 0
+  float filterRadius;         ///< filter half-width in fine particle radii, > 0
+  float filterMaxPixels;      ///< cap on the filter half-width [px]
+  float filterRange;          ///< depth range kept by the filter, in fine particle radii
+  bool filterHalfResolution;  ///< filter the depth at half resolution (else at full resolution)
+  float thicknessBlur;        ///< sigma of the thickness blur in fine particle radii (0: off)
+  float refraction;           ///< screen-space refraction offset at full thickness [view units]
 
   bool autoRange = true;  ///< particle view: range from the parameters, else colorRange
   ColorRange colorRange;  ///< particle view range when autoRange is off

@@ -27,6 +27,10 @@ constexpr double kMinRestingCoverage = 0.98;
 // water's pixels differing by more than 24 levels (before: 0.94 levels and 2.6%).
 constexpr double kMaxImageMeanDifference = 2.0;  // [levels]
 constexpr double kMaxWaterFractionOver = 0.01;
+// The renderer's part of it: the same uniform-high water drawn from particles at fluidplaying's resolutions
+// (coarsenedRestingTank) against the uniform-high particles, mean over the water's pixels (before the
+// thickness blur: 2.00 levels; with it 1.09).
+constexpr double kMaxSameWaterMeanDifference = 1.5;  // [levels]
 // Creases (seams, rings, blobs): the share of interior water pixels whose normal turns by more than 20
 // degrees over 2 pixels, in a moving frame of fine and coarse particles (before: 0.17).
 constexpr double kMaxMovingCreases = 0.03;
@@ -78,6 +82,25 @@ TEST_F(WaterLookTest, AdaptiveWaterAtRestLooksLikeUniformWater) {
   EXPECT_LE(d.fractionOver, kMaxWaterFractionOver);
 }
 
+TEST_F(WaterLookTest, TheSameWaterFromCoarseParticlesLooksLikeItFromFineOnes) {
+  const test::LookShot uniform = shoot(test::restingHandTank(false));
+  const test::LookShot coarse = shoot(test::coarsenedRestingTank());
+  const test::WaterDifference d =
+      test::compareWater(uniform.image, coarse.image, uniform.depth, coarse.depth, 24);
+  EXPECT_GT(d.waterPixels, 20000u);
+  EXPECT_LE(d.meanLevels, kMaxSameWaterMeanDifference);
+  EXPECT_LE(d.fractionOver, kMaxWaterFractionOver);
+}
+
+TEST_F(WaterLookTest, TheSameWaterToleranceFailsTheUnblurredThickness) {
+  // the thickness summed from the spheres as drawn: the coarse particles' spacing shows as blotches
+  s_renderer->settings().thicknessBlur = 0.0f;
+  const test::LookShot uniform = shoot(test::restingHandTank(false));
+  const test::LookShot coarse = shoot(test::coarsenedRestingTank());
+  EXPECT_GT(test::compareWater(uniform.image, coarse.image, uniform.depth, coarse.depth, 24).meanLevels,
+            kMaxSameWaterMeanDifference);
+}
+
 TEST_F(WaterLookTest, AMovingFrameOfMixedResolutionHasNoCreases) {
   const test::LookScene scene = test::movingPropeller();
   const test::LookShot shot = shoot(scene);
@@ -96,4 +119,51 @@ TEST_F(WaterLookTest, TheMetricsFailTheUnfilteredSurface) {
   const test::LookScene moving = test::movingPropeller();
   EXPECT_GT(test::measureCreases(shoot(moving).surface, 2, 20.0f, moving.fineRadius).fraction,
             3.0 * kMaxMovingCreases);
+}
+
+namespace {
+
+// The resting surface at 1280x720, where the normals see more of what the filter leaves (before the filter at
+// half resolution: 3.22 deg fluidplaying, 0.81 uniform-high).
+class WaterLookHighResolutionTest : public ::testing::Test {
+ protected:
+  static constexpr int kW = 1280;
+  static constexpr int kH = 720;
+  static void SetUpTestSuite() {
+    s_context = std::make_unique<render::OffscreenContext>(kW, kH);
+    s_renderer = std::make_unique<render::FluidRenderer>(render::defaultShaderDir());
+  }
+  static void TearDownTestSuite() {
+    s_renderer.reset();
+    s_context.reset();
+  }
+  void SetUp() override { s_renderer->settings() = render::RenderSettings(); }
+  static std::unique_ptr<render::OffscreenContext> s_context;
+  static std::unique_ptr<render::FluidRenderer> s_renderer;
+};
+
+std::unique_ptr<render::OffscreenContext> WaterLookHighResolutionTest::s_context;
+std::unique_ptr<render::FluidRenderer> WaterLookHighResolutionTest::s_renderer;
+
+}  // namespace
+
+TEST_F(WaterLookHighResolutionTest, ARestingTankIsFlatInEveryMode) {
+  for (bool adaptive : {false, true}) {
+    const test::LookScene scene = test::restingHandTank(adaptive);
+    const test::LookShot shot = test::shoot(*s_renderer, scene, kW, kH);
+    const test::RestingSurface r = test::measureRestingSurface(shot.surface, scene.surfaceY, scene.inner);
+    SCOPED_TRACE(adaptive ? "fluidplaying" : "uniform-high");
+    ASSERT_GT(r.pixels, 20000u);
+    EXPECT_GE(r.coverage, kMinRestingCoverage);
+    EXPECT_LE(r.rmsNormalDegrees, kMaxRestingNormalRms);
+  }
+}
+
+TEST_F(WaterLookHighResolutionTest, TheToleranceFailsTheFullResolutionFilter) {
+  // the filter at full resolution strides over its 12 pairs at this size and leaves ripples
+  s_renderer->settings().filterHalfResolution = false;
+  const test::LookScene scene = test::restingHandTank(true);
+  const test::LookShot shot = test::shoot(*s_renderer, scene, kW, kH);
+  EXPECT_GT(test::measureRestingSurface(shot.surface, scene.surfaceY, scene.inner).rmsNormalDegrees,
+            kMaxRestingNormalRms);
 }

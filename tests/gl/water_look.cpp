@@ -69,6 +69,21 @@ int main(int argc, char** argv) {
       "adaptive vs uniform at rest: mean %.2f levels over %zu water px (%.2f over the image), %.2f %% over "
       "24 levels\n",
       d.meanLevels, d.waterPixels, d.imageMeanLevels, 100.0 * d.fractionOver);
+  {
+    // the renderer's part: the same uniform-high water drawn from the particles at fluidplaying's resolutions
+    const test::LookScene scene = test::coarsenedRestingTank();
+    const test::LookShot shot = test::shoot(renderer, scene, width, height);
+    const test::RestingSurface r = test::measureRestingSurface(shot.surface, scene.surfaceY, scene.inner);
+    const test::WaterDifference c =
+        test::compareWater(shots[0].image, shot.image, shots[0].depth, shot.depth, 24);
+    std::printf(
+        "uniform-high state coarsened as fluidplaying (%zu particles): normal rms %.2f deg; against "
+        "uniform-high: mean %.2f levels over %zu water px (%.2f over the image), %.2f %% over 24 levels\n",
+        scene.state.particles.size(), r.rmsNormalDegrees, c.meanLevels, c.waterPixels, c.imageMeanLevels,
+        100.0 * c.fractionOver);
+    if (!pngDir.empty())
+      render::writePng(pngDir + "/rest_coarsened.png", shot.image);
+  }
   for (const auto& [name, scene] : {std::make_pair("propeller fluidplaying", test::movingPropeller())}) {
     const test::LookShot shot = test::shoot(renderer, scene, width, height);
     const test::Creases c = test::measureCreases(shot.surface, 2, 20.0f, scene.fineRadius);

@@ -8,8 +8,10 @@
 //                          particles stirred by the propeller
 // The camera is the headless renderer's: it frames the tank at yaw 0.6, pitch 0.35 rad.
 
+#include <cmath>
 #include <cstdlib>
 #include <string>
+#include <unordered_map>
 
 #include "render/render_settings.h"
 #include "water_metrics.h"
@@ -38,6 +40,51 @@ inline LookScene restingHandTank(bool adaptive) {
   s.inner = Eigen::AlignedBox2f(Eigen::Vector2f(-tank.x() + margin, -tank.z() + margin),
                                 Eigen::Vector2f(tank.x() - margin, tank.z() - margin));
   s.surfaceY = simulatedSurfaceHeight(s.state.particles, s.fineRadius, s.inner);
+  return s;
+}
+
+// The uniform-high resting tank at the resolutions fluidplaying keeps there (the renderer's part of the
+// adaptive-vs-uniform difference, the same water drawn from other particles): particles deeper than
+// `fineDepth` below the surface are merged 2 x 2 x 2 into coarse ones of 8 fine masses (radius 2r), those
+// deeper than `midDepth` 3 x 3 x 3 (27 masses, 3r), at the centre of mass of each group. The fluidplaying
+// state at frame 90 holds fine particles in the top 3.5-4 cm, masses of about 8 between 4.5 and 6 cm and of
+// about 23 below 9 cm.
+inline LookScene coarsenedRestingTank(float fineDepth = 0.04f, float midDepth = 0.08f) {
+  LookScene s = restingHandTank(false);
+  const sim::ParticleSet fine = s.state.particles;
+  const float spacing = 2.0f * s.fineRadius;
+  struct Group {
+    sim::Vec3 x = sim::Vec3::Zero();
+    sim::Real m = 0;
+    int n = 0;
+  };
+  std::unordered_map<long long, Group> groups;
+  sim::ParticleSet& out = s.state.particles;
+  out.clear();
+  for (std::size_t i = 0; i < fine.size(); ++i) {
+    const float depth = s.surfaceY - float(fine.x[i].y());
+    const int level = depth < fineDepth ? 1 : depth < midDepth ? 2 : 3;
+    if (level == 1) {
+      out.add(fine.x[i], fine.v[i], fine.m[i], fine.H[i], 1000.0);
+      continue;
+    }
+    const float cell = float(level) * spacing;
+    const long long key =
+        level + 4 * ((long long)(std::floor(float(fine.x[i].x()) / cell) + 500) +
+                     1000 * ((long long)(std::floor(float(fine.x[i].y()) / cell) + 500) +
+                             1000 * (long long)(std::floor(float(fine.x[i].z()) / cell) + 500)));
+    Group& g = groups[key];
+    g.x += fine.x[i] * fine.m[i];
+    g.m += fine.m[i];
+    ++g.n;
+  }
+  const sim::Real fineH = fine.H[0];
+  for (const auto& kv : groups) {
+    const Group& g = kv.second;
+    out.add(g.x / g.m, sim::Vec3::Zero(), g.m, fineH * std::cbrt(sim::Real(g.n)), 1000.0);
+  }
+  for (std::size_t i = 0; i < out.size(); ++i)
+    out.splitTime[i] = -1.0f;
   return s;
 }
 
