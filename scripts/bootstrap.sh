@@ -203,9 +203,10 @@ run_fuzzers() {
   for name in "${FUZZ_TARGETS[@]}"; do
     section "Fuzz: fuzz_${name} (${FUZZ_SECONDS:-30} s)"
     mkdir -p "build-fuzz/corpus/${name}"
-    # new inputs go to build-fuzz/corpus/, the seeds are only read; -print_final_stats gives the exec count
+    # new inputs go to build-fuzz/corpus/, the seeds are only read; -print_final_stats gives the exec count.
+    # -timeout=60: every input runs in milliseconds; on a starved machine 10 s gave false "timeouts"
     local log="build-fuzz/fuzz_${name}.log"
-    if ! build-fuzz/tests/fuzz/"fuzz_${name}" -max_total_time="${FUZZ_SECONDS:-30}" -timeout=10 \
+    if ! build-fuzz/tests/fuzz/"fuzz_${name}" -max_total_time="${FUZZ_SECONDS:-30}" -timeout=60 \
       -rss_limit_mb=2048 -print_final_stats=1 -artifact_prefix="build-fuzz/crash-${name}-" \
       "build-fuzz/corpus/${name}" "tests/fuzz/${name}" >"${log}" 2>&1; then
       status=1
