@@ -30,8 +30,9 @@ struct RenderSettings {
   float filterMaxPixels;      ///< cap on the filter half-width [px]
   float filterRange;          ///< depth range kept by the filter, in fine particle radii
   bool filterHalfResolution;  ///< filter the depth at half resolution (else at full resolution)
-  float thicknessBlur;        ///< sigma of the thickness blur in fine particle radii (0: off)
-  float refraction;           ///< screen-space refraction offset at full thickness [view units]
+  float thicknessBlur;  ///< sigma of the thickness blur in fine radii, each filter pass (half resolution; 0:
+                        ///< off)
+  float refraction;     ///< screen-space refraction offset at full thickness [view units]
 
   bool autoRange = true;  ///< particle view: range from the parameters, else colorRange
   ColorRange colorRange;  ///< particle view range when autoRange is off
