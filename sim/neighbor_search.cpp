@@ -75,7 +75,14 @@ namespace {
 /// Distance from coordinate `p` to the slab [lo, lo + cell) along one axis, shrunk by a margin so that
 /// points the cell index rounded into a neighbouring cell are never pruned.
 inline Real slabDistance(Real p, Real lo, Real cell, Real margin) {
-  return std::max({lo - p - margin, p - (lo + cell) - margin, Real(0)});
+  const Real d = std::max(lo - p, p - (lo + cell)) - margin;
+  return d > Real(0) ? d : Real(0);
+}
+
+/// floor(f) for the cell bounds of a row; anything below zero (NaN included) gives -1, which the caller
+/// clamps like any cell left of the grid (std::floor is a library call on baseline x86-64)
+inline int floorCell(Real f) {
+  return f >= Real(0) ? int(std::min(f, Real(1 << 30))) : -1;
 }
 
 }  // namespace
@@ -101,6 +108,27 @@ void NeighborSearch::build(const UniformGrid& grid, const std::vector<Vec3>& qx,
   std::vector<std::size_t> roomStart(nChunks + 1, 0);
   std::vector<std::uint8_t> overflowed(nChunks, 0);
   std::vector<std::vector<std::uint32_t>> spills(nChunks);
+  // The largest support in each cell of every source with per-point supports (0 where empty): a fine
+  // particle then skips the cells of the coarsest reach that hold only fine particles. The lists come out
+  // the same, in the same order.
+  m_cellMaxH.resize(sources.size());
+  for (std::size_t s = 0; s < sources.size(); ++s) {
+    if (!sources[s].H)
+      continue;
+    const std::uint32_t* start = sources[s].cellStart->data();
+    const Real* sH = sources[s].H;
+    std::vector<Real>& cellMax = m_cellMaxH[s];
+    cellMax.resize(sources[s].cellStart->size() - 1);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cellMax.size(), 16384),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                        for (std::size_t c = r.begin(); c < r.end(); ++c) {
+                          Real h = 0;
+                          for (std::uint32_t j = start[c]; j < start[c + 1]; ++j)
+                            h = std::max(h, sH[j]);
+                          cellMax[c] = h;
+                        }
+                      });
+  }
   auto searchChunk = [&](std::size_t chunk) {
     const std::size_t room = roomStart[chunk + 1] - roomStart[chunk];
     std::uint32_t* dst = out.indices.data() + roomStart[chunk];
@@ -143,25 +171,46 @@ void NeighborSearch::build(const UniformGrid& grid, const std::vector<Vec3>& qx,
             const Real dyz2 = dy * dy + dz * dz;
             if (dyz2 >= hMax2)
               continue;
+            // a row with no point in the whole reach (most rows of the walls) costs two loads
+            const std::uint32_t rowBase = grid.linear(0, cy, cz);
+            if (start[rowBase + std::uint32_t(x0)] == start[rowBase + std::uint32_t(x1) + 1])
+              continue;
             // the cells of the row that the largest support reaches
             const Real w = std::sqrt(hMax2 - dyz2) + margin;
-            const int rx0 = std::max(x0, int(std::floor((xi.x() - w - origin.x()) * invCell)));
-            const int rx1 = std::min(x1, int(std::floor((xi.x() + w - origin.x()) * invCell)));
+            const int rx0 = std::max(x0, floorCell((xi.x() - w - origin.x()) * invCell));
+            const int rx1 = std::min(x1, floorCell((xi.x() + w - origin.x()) * invCell));
             if (rx0 > rx1)
               continue;
             if (!src.H) {
               // cells rx0..rx1 of one row are contiguous in the sorted arrays
-              const std::uint32_t b = start[grid.linear(rx0, cy, cz)];
-              const std::uint32_t e = start[grid.linear(rx1, cy, cz) + 1];
+              const std::uint32_t b = start[rowBase + std::uint32_t(rx0)];
+              const std::uint32_t e = start[rowBase + std::uint32_t(rx1) + 1];
               for (std::uint32_t j = b; j < e; ++j) {
                 if (j != skip && (xi - sx[j]).squaredNorm() < hMax2)
                   emit(j + offset);
               }
               continue;
             }
-            // cells rx0..rx1 of one row are contiguous in the sorted arrays
-            const std::uint32_t b = start[grid.linear(rx0, cy, cz)];
-            const std::uint32_t e = start[grid.linear(rx1, cy, cz) + 1];
+            // Trim the row's ends to the cells whose own largest support reaches i: a fine particle's row is
+            // sized for the coarsest support, and most cells hold only fine particles. (Cells inside the
+            // trimmed range are scanned whole; empty cells have no points to scan.)
+            const Real* cellMax = m_cellMaxH[std::size_t(s)].data() + rowBase;
+            auto reaches = [&](int cx) {
+              const Real hc = Real(0.5) * (Hi + cellMax[cx]);
+              const Real dx = slabDistance(xi.x(), origin.x() + Real(cx) * cell, cell, margin);
+              return dx * dx + dyz2 < hc * hc;
+            };
+            int cx0 = rx0;
+            int cx1 = rx1;
+            while (cx0 <= cx1 && !reaches(cx0))
+              ++cx0;
+            while (cx1 > cx0 && !reaches(cx1))
+              --cx1;
+            if (cx0 > cx1)
+              continue;
+            // cells cx0..cx1 of one row are contiguous in the sorted arrays
+            const std::uint32_t b = start[rowBase + std::uint32_t(cx0)];
+            const std::uint32_t e = start[rowBase + std::uint32_t(cx1) + 1];
             const Real* sH = src.H;
             for (std::uint32_t j = b; j < e; ++j) {
               const Real h = Real(0.5) * (Hi + sH[j]);

@@ -84,8 +84,16 @@ class NeighborSearch {
   void build(const UniformGrid& grid, const std::vector<Vec3>& qx, const std::vector<Real>& qH,
              const std::vector<GridPoints>& sources, int selfSource, Real maxH, NeighborList& out);
 
-  /// bytes held by scratch buffers: none, the lists are written in place (kept for callers that sum memory)
-  std::size_t memoryBytes() const { return 0; }
+  /// bytes held by scratch buffers (the lists are written in place)
+  std::size_t memoryBytes() const {
+    std::size_t bytes = 0;
+    for (const std::vector<Real>& c : m_cellMaxH)
+      bytes += c.capacity() * sizeof(Real);
+    return bytes;
+  }
+
+ private:
+  std::vector<std::vector<Real>> m_cellMaxH;  // per source with per-point supports: largest support per cell
 };
 
 }  // namespace fp::sim

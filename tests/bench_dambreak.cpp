@@ -5,6 +5,11 @@
 ///
 ///   fp_bench [--scene FILE] [--sim-time S] [--threads LIST] [--csv FILE] [--quick] [--set KEY=VALUE]...
 ///   [--help]
+///   fp_bench --suite [--sim-time S] [--hand-time S] [--csv FILE]
+///
+/// --suite measures the rows of issue #12 in one run: the hand tank at r = 5 mm (fluidplaying, the recorded
+/// splash hand, headless, 1 and 2 threads), the hand tank as shipped, and the reference dam break (2 threads,
+/// --sim-time of it, default 2 s), as one table and CSV.
 
 #include <algorithm>
 #include <chrono>
@@ -23,6 +28,7 @@
 
 #include "engine/cli.h"
 #include "engine/cli_app.h"
+#include "engine/headless_runner.h"
 #include "engine/scene_loader.h"
 #include "sim/simulation.h"
 
@@ -66,6 +72,8 @@ struct Options {
   std::vector<int> threads{1, 2};
   std::string csvPath;
   std::vector<std::string> sets;  ///< --set KEY=VALUE over the scene's parameters
+  bool suite = false;             ///< --suite: the rows of issue #12
+  double handTime = 1.0;          ///< --hand-time: simulated seconds of each hand-tank run of the suite
 };
 
 std::vector<int> parseThreadList(const std::string& text) {
@@ -129,6 +137,12 @@ struct CommandLine {
     app.add_flag("--quick", o.quick,
                  "smoke test: assets/scenes/dam_break.json for 0.5 s (--scene/--sim-time win)");
     line.addSet(o.sets);
+    app.add_flag("--suite", o.suite,
+                 "the rows of issue #12 in one run: hand tank at r = 5 mm (1 and 2 threads), hand tank as "
+                 "shipped, reference dam break (2 threads, --sim-time of it)");
+    line.addPositive(
+        "--hand-time", [this](double s) { o.handTime = s; },
+        "simulated seconds of each hand-tank run of --suite (default 1.0; the recorded hand lasts 1.25 s)");
     app.footer("Exit codes: 0 ok, 2 bad command line, 3 bad scene or output, 4 simulation unstable.");
   }
 };
@@ -392,6 +406,174 @@ void printComparison(std::ostream& out, const std::vector<Row>& rows, double sim
   }
 }
 
+// ---- --suite: the rows of issue #12 ----
+
+const char* const kHandScene = FP_SOURCE_DIR "/assets/scenes/hand_tank.json";
+const char* const kHandScript = FP_SOURCE_DIR "/assets/hands/splash.csv";
+/// The coarsest particle radius at which a finger spans a particle [m] (issue #12).
+constexpr double kFingerRadius = 0.005;
+
+/// One run of the suite.
+struct SuiteRow {
+  std::string name;
+  int threads = 0;
+  double particles = 0;  ///< mean fluid particles over the steps
+  std::uint64_t steps = 0;
+  double simSeconds = 0;
+  double wallSeconds = 0;
+  double usPerParticleStep = 0;
+  double bytesPerParticle = 0;  ///< Simulation::memoryBytes over the final fluid particle count
+  fp::sim::PhaseTimes msPerStep;
+  double realTime() const { return wallSeconds > 0 ? simSeconds / wallSeconds : 0.0; }
+  double wallPerSimSecond() const { return simSeconds > 0 ? wallSeconds / simSeconds : 0.0; }
+};
+
+fp::sim::PhaseTimes perStepMs(const fp::sim::PhaseTimes& t, std::uint64_t steps) {
+  const double k = 1e3 / double(std::max<std::uint64_t>(steps, 1));
+  fp::sim::PhaseTimes ms;
+  ms.neighbors = t.neighbors * k;
+  ms.density = t.density * k;
+  ms.divergence = t.divergence * k;
+  ms.viscosity = t.viscosity * k;
+  ms.pressure = t.pressure * k;
+  ms.boundaries = t.boundaries * k;
+  ms.integrate = t.integrate * k;
+  ms.levels = t.levels * k;
+  ms.adaptation = t.adaptation * k;
+  return ms;
+}
+
+/// The hand tank in its scene's mode (fluidplaying) with the recorded splash hand, headless through the app
+/// loop as `fluidplaying --headless --hand-script` runs it; `radius` 0 keeps the scene's particle radius.
+SuiteRow runHandTank(const std::string& name, double radius, int threads, double simTime) {
+  const fp::engine::ThreadLimit limit(threads);
+  fp::engine::CliOptions o;
+  o.headless = true;
+  o.scenePath = kHandScene;
+  o.handScript = kHandScript;
+  o.simTime = simTime;
+  o.threads = threads;
+  o.quiet = true;
+  if (radius > 0)
+    o.sets.push_back("particle_radius=" + std::to_string(radius));
+  std::cerr << "run: " << name << ", " << threads << " thread(s), " << simTime << " s to simulate\n";
+  std::ostringstream sink;
+  const fp::engine::RunSummary s = fp::engine::runHeadless(o, sink, sink);
+  if (s.status != "ok")
+    throw fp::sim::InstabilityError(s.message);
+  SuiteRow r;
+  r.name = name;
+  r.threads = threads;
+  r.particles = s.particlesMean;
+  r.steps = s.steps;
+  r.simSeconds = s.simSeconds;
+  r.wallSeconds = s.wallSeconds;
+  r.usPerParticleStep = s.usPerParticleStep;
+  r.bytesPerParticle = s.particlesFinal ? double(s.memoryBytes) / double(s.particlesFinal) : 0.0;
+  r.msPerStep = perStepMs(s.phases, s.steps);
+  return r;
+}
+
+const std::vector<std::pair<const char*, std::function<std::string(const SuiteRow&)>>>& suiteColumns() {
+  static const std::vector<std::pair<const char*, std::function<std::string(const SuiteRow&)>>> list = {
+      {"run", [](const SuiteRow& r) { return r.name; }},
+      {"threads", [](const SuiteRow& r) { return format(r.threads, 0); }},
+      {"particles", [](const SuiteRow& r) { return format(r.particles, 0); }},
+      {"steps", [](const SuiteRow& r) { return format(double(r.steps), 0); }},
+      {"sim_s", [](const SuiteRow& r) { return format(r.simSeconds, 4); }},
+      {"wall_s", [](const SuiteRow& r) { return format(r.wallSeconds, 3); }},
+      {"real_time_factor", [](const SuiteRow& r) { return format(r.realTime(), 3); }},
+      {"wall_s_per_sim_s", [](const SuiteRow& r) { return format(r.wallPerSimSecond(), 2); }},
+      {"us_per_particle_step", [](const SuiteRow& r) { return format(r.usPerParticleStep, 3); }},
+      {"bytes_per_particle", [](const SuiteRow& r) { return format(r.bytesPerParticle, 0); }},
+      {"neighbors_ms", [](const SuiteRow& r) { return format(r.msPerStep.neighbors, 3); }},
+      {"density_ms", [](const SuiteRow& r) { return format(r.msPerStep.density, 3); }},
+      {"divergence_ms", [](const SuiteRow& r) { return format(r.msPerStep.divergence, 3); }},
+      {"viscosity_ms", [](const SuiteRow& r) { return format(r.msPerStep.viscosity, 3); }},
+      {"pressure_ms", [](const SuiteRow& r) { return format(r.msPerStep.pressure, 3); }},
+      {"levels_ms", [](const SuiteRow& r) { return format(r.msPerStep.levels, 3); }},
+      {"adaptation_ms", [](const SuiteRow& r) { return format(r.msPerStep.adaptation, 3); }},
+  };
+  return list;
+}
+
+void writeSuiteCsv(std::ostream& out, const std::vector<SuiteRow>& rows) {
+  bool first = true;
+  for (const auto& column : suiteColumns()) {
+    out << (first ? "" : ",") << column.first;
+    first = false;
+  }
+  out << "\n";
+  for (const SuiteRow& r : rows) {
+    first = true;
+    for (const auto& column : suiteColumns()) {
+      out << (first ? "" : ",") << column.second(r);
+      first = false;
+    }
+    out << "\n";
+  }
+}
+
+void printSuite(std::ostream& out, const std::vector<SuiteRow>& rows, double damTime) {
+  std::vector<std::size_t> width;
+  for (const auto& [name, get] : suiteColumns()) {
+    std::size_t w = std::string(name).size();
+    for (const SuiteRow& r : rows)
+      w = std::max(w, get(r).size());
+    width.push_back(w + 2);
+  }
+  std::size_t k = 0;
+  for (const auto& column : suiteColumns()) {
+    const std::string name = column.first;
+    out << std::string(width[k++] - name.size(), ' ') << name;
+  }
+  out << "\n";
+  for (const SuiteRow& r : rows) {
+    k = 0;
+    for (const auto& column : suiteColumns()) {
+      const std::string v = column.second(r);
+      out << std::string(width[k++] - v.size(), ' ') << v;
+    }
+    out << "\n";
+  }
+  out << "\nCSV:\n";
+  writeSuiteCsv(out, rows);
+  // the issue's targets, each from the rows above
+  const SuiteRow& fine2 = rows[0];
+  const SuiteRow& fine1 = rows[1];
+  const SuiteRow& shipped = rows[2];
+  const SuiteRow& dam = rows[3];
+  const double steps2s = double(dam.steps) * kDefaultSimTime / std::max(dam.simSeconds, 1e-12);
+  char text[240];
+  out << "\nIssue #12 targets (this run):\n";
+  auto line = [&](const char* name, double value, const char* goal, bool met) {
+    std::snprintf(text, sizeof(text), "  %-58s %10.3f  goal %-12s %s\n", name, value, goal,
+                  met ? "met" : "not met");
+    out << text;
+  };
+  line("hand tank r = 5 mm, 2 threads: real-time factor", fine2.realTime(), ">= 1.0",
+       fine2.realTime() >= 1.0);
+  line("hand tank r = 5 mm, 2 threads: us per particle-step", fine2.usPerParticleStep, "<= 1.0",
+       fine2.usPerParticleStep <= 1.0);
+  line("hand tank as shipped, 2 threads: real-time factor", shipped.realTime(), ">= 3",
+       shipped.realTime() >= 3.0);
+  line("dam break, 2 threads: wall s per simulated s", dam.wallPerSimSecond(), "<= 76",
+       dam.wallPerSimSecond() <= 76.0);
+  line("dam break: reference wall s per simulated s / ours", kRefWallPerSimSecond / dam.wallPerSimSecond(),
+       ">= 2", kRefWallPerSimSecond / dam.wallPerSimSecond() >= 2.0);
+  line("dam break: time steps over 2 s (extrapolated from the span run)", steps2s, "<= 1300",
+       steps2s <= 1300.0);
+  line("dam break: bytes per fluid particle", dam.bytesPerParticle, "<= 400", dam.bytesPerParticle <= 400.0);
+  const double speedup =
+      fine2.usPerParticleStep > 0 ? fine1.usPerParticleStep / fine2.usPerParticleStep : 0.0;
+  line("hand tank r = 5 mm: 1 -> 2 threads speed-up (us per particle-step)", speedup, ">= 1.9",
+       speedup >= 1.9);
+  if (damTime < kDefaultSimTime) {
+    out << "  note: the dam break ran " << damTime << " s of the reference's " << kDefaultSimTime
+        << " s; its step count is extrapolated, and the early collapse is not the whole run\n";
+  }
+}
+
 /// The comparison only makes sense for the reference's own scene: the hires dam break.
 bool isHiresScene(const std::string& path) {
   return std::filesystem::path(path).filename() == "dam_break_hires.json";
@@ -404,6 +586,48 @@ int main(int argc, char** argv) {
   if (const std::optional<int> exit = command.line.parse(argc, argv))
     return *exit;
   const Options& options = command.o;
+  if (options.suite) {
+    const double damTime = options.simTime.value_or(kDefaultSimTime);
+    std::vector<SuiteRow> rows;
+    try {
+      std::cout << "fp_bench --suite: issue #12's rows in one run\nmachine: " << machineDescription() << "\n";
+      rows.push_back(runHandTank("hand_tank_r5mm", kFingerRadius, 2, options.handTime));
+      rows.push_back(runHandTank("hand_tank_r5mm", kFingerRadius, 1, options.handTime));
+      rows.push_back(runHandTank("hand_tank_shipped", 0.0, 2, options.handTime));
+      const Row dam = runOnce(kDefaultScene, damTime, kRefThreads, {});
+      SuiteRow r;
+      r.name = "dam_break_hires";
+      r.threads = dam.threads;
+      r.particles = double(dam.particles);
+      r.steps = dam.steps;
+      r.simSeconds = dam.simSeconds;
+      r.wallSeconds = dam.wallSeconds;
+      r.usPerParticleStep = dam.usPerParticleStep;
+      r.bytesPerParticle = dam.bytesPerParticle;
+      r.msPerStep = dam.msPerStepByPhase;
+      rows.push_back(r);
+    } catch (const std::invalid_argument& e) {
+      std::cerr << fp::engine::usageErrorLine("fp_bench", e.what()) << "\n";
+      return kExitUsage;
+    } catch (const fp::sim::InputError& e) {
+      std::cerr << "fp_bench: " << e.what() << "\n";
+      return kExitInput;
+    } catch (const fp::sim::InstabilityError& e) {
+      std::cerr << "fp_bench: unstable: " << e.what() << "\n";
+      return kExitUnstable;
+    }
+    std::cout << "\n";
+    printSuite(std::cout, rows, damTime);
+    if (!options.csvPath.empty()) {
+      std::ofstream csv(options.csvPath);
+      writeSuiteCsv(csv, rows);
+      if (!csv) {
+        std::cerr << "fp_bench: " << options.csvPath << ": cannot write the CSV\n";
+        return kExitInput;
+      }
+    }
+    return kExitOk;
+  }
   const std::string scenePath = options.scene.value_or(options.quick ? kQuickScene : kDefaultScene);
   const double simTime = options.simTime.value_or(options.quick ? kQuickSimTime : kDefaultSimTime);
 
