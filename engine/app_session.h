@@ -280,8 +280,6 @@ class AppSession {
   double m_stepWallSeconds = 0.0;  // written by the task
   int m_taskSteps = 0;             // written by the task
   std::string m_taskError;         // written by the task
-  double m_frameWall = 0.0;
-  double m_rtfSmoothed = 0.0;
   double m_wallTotal = 0.0;
   double m_simTotal = 0.0;
   std::chrono::steady_clock::time_point m_lastFinish;

@@ -3,6 +3,8 @@
 #   bash scripts/bootstrap.sh demo    install, build, open the desktop app (or, with no display, render the hand
 #                                     tank with a recorded hand into out/demo_frames/ as PNG)
 #   bash scripts/bootstrap.sh test    install, check formatting, build, run all tests, then the sanitizer tests
+#                                     (ASan+UBSan) and the fuzzers (30 s each); FP_CI_TSAN=1 adds the
+#                                     ThreadSanitizer stage (see docs/robustness.md: not usable yet)
 #   bash scripts/bootstrap.sh build   install and build only
 # Environment: FP_JOBS (default 2) sets the build and ctest parallelism.
 set -euo pipefail
@@ -125,11 +127,24 @@ run_tests() {
   fi
 }
 
+# Stage timing for the summary: `timed NAME COMMAND...` runs the command and records its wall time.
+stage_times=()
+timed() {
+  local name="$1" start status=0
+  shift
+  start=$(date +%s)
+  "$@" || status=$?
+  stage_times+=("${name} $(($(date +%s) - start)) s")
+  return "${status}"
+}
+
 run_sanitizer_tests() {
   section "Sanitizer build (ASan+UBSan, build-asan/)"
-  # Called as `run_sanitizer_tests || ...`, where set -e is off: each step checks its own status.
-  cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DFP_SANITIZE=ON -DFP_WERROR=ON || return 1
-  cmake --build build-asan -j"${JOBS}" || return 1
+  # Called as `run_sanitizer_tests || ...`, where set -e is off: each step checks its own status; a build that
+  # fails stops the whole run.
+  cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DFP_SANITIZE=ON -DFP_WERROR=ON ||
+    die "the sanitizer build could not be configured"
+  cmake --build build-asan -j"${JOBS}" || die "the sanitizer build failed"
   local status=0
   local -a sanitizer_env=(
     ASAN_OPTIONS=detect_leaks=1:abort_on_error=1
@@ -143,6 +158,61 @@ run_sanitizer_tests() {
   # The small physics cases are cheap enough under the sanitizers; there may be none yet, which is not a failure.
   env "${sanitizer_env[@]}" ctest --test-dir build-asan --output-on-failure -j"${JOBS}" -L physics -R Small \
     --no-tests=ignore || status=1
+  return "${status}"
+}
+
+# ThreadSanitizer over the unit tests (the app loop's session tests among them) and the small physics tests,
+# with TBB as Debian ships it. Suppressions only in tests/tsan.supp, each with its reason. Opt-in
+# (FP_CI_TSAN=1): Debian's libtbb is not instrumented, so every task spawn reads as a race with the spawning
+# thread's earlier writes (docs/robustness.md, "Races").
+readonly TSAN_TARGETS=(test_sim_unit test_engine test_app_unit test_physics fluidplaying)
+run_tsan_tests() {
+  section "ThreadSanitizer build (build-tsan/)"
+  cmake -S . -B build-tsan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DFP_TSAN=ON -DFP_WERROR=ON ||
+    die "the ThreadSanitizer build could not be configured"
+  cmake --build build-tsan -j"${JOBS}" --target "${TSAN_TARGETS[@]}" || die "the ThreadSanitizer build failed"
+  local status=0
+  local -a tsan_env=(
+    "TSAN_OPTIONS=suppressions=${PWD}/tests/tsan.supp:halt_on_error=1:second_deadlock_stack=1"
+  )
+  section "ThreadSanitizer tests: unit"
+  env "${tsan_env[@]}" ctest --test-dir build-tsan --output-on-failure -j"${JOBS}" -L unit --no-tests=error ||
+    status=1
+  section "ThreadSanitizer tests: physics *Small*"
+  env "${tsan_env[@]}" ctest --test-dir build-tsan --output-on-failure -j"${JOBS}" -L physics -R Small \
+    --no-tests=ignore || status=1
+  return "${status}"
+}
+
+# libFuzzer (clang 14, libfuzzer-14-dev): every file format read from outside, 30 s each over the seeds of
+# tests/fuzz/ (see tests/fuzz/README.md). A crash leaves build-fuzz/crash-TARGET-* to reproduce.
+readonly FUZZ_TARGETS=(scene preset pose_track joint_track state)
+run_fuzzers() {
+  section "Fuzz build (libFuzzer, clang, build-fuzz/)"
+  command -v clang++ >/dev/null 2>&1 || die "clang++ not found (package clang)"
+  # no -Werror here: the Release build holds gcc's warnings at zero; clang's extra ones are only shown
+  cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_C_COMPILER=clang \
+    -DCMAKE_CXX_COMPILER=clang++ -DFP_FUZZ=ON -DFP_BUILD_TESTS=OFF ||
+    die "the fuzz build could not be configured"
+  local targets=() name
+  for name in "${FUZZ_TARGETS[@]}"; do
+    targets+=("fuzz_${name}")
+  done
+  cmake --build build-fuzz -j"${JOBS}" --target "${targets[@]}" || die "the fuzz build failed"
+  local status=0
+  for name in "${FUZZ_TARGETS[@]}"; do
+    section "Fuzz: fuzz_${name} (${FUZZ_SECONDS:-30} s)"
+    mkdir -p "build-fuzz/corpus/${name}"
+    # new inputs go to build-fuzz/corpus/, the seeds are only read; -print_final_stats gives the exec count
+    local log="build-fuzz/fuzz_${name}.log"
+    if ! build-fuzz/tests/fuzz/"fuzz_${name}" -max_total_time="${FUZZ_SECONDS:-30}" -timeout=10 \
+      -rss_limit_mb=2048 -print_final_stats=1 -artifact_prefix="build-fuzz/crash-${name}-" \
+      "build-fuzz/corpus/${name}" "tests/fuzz/${name}" >"${log}" 2>&1; then
+      status=1
+      tail -n 60 "${log}"
+    fi
+    grep -E "stat::number_of_executed_units|Done [0-9]+ runs" "${log}" || true
+  done
   return "${status}"
 }
 
@@ -186,11 +256,16 @@ case "${MODE}" in
   test)
     # Keep going after a format or test failure so one run reports all of them; a build failure stops at once.
     failures=()
-    check_format || failures+=("format")
-    build
-    run_tests || failures+=("tests")
-    run_sanitizer_tests || failures+=("sanitizer tests")
+    timed format check_format || failures+=("format")
+    timed build build || die "the build failed"
+    timed tests run_tests || failures+=("tests")
+    timed asan run_sanitizer_tests || failures+=("sanitizer tests")
+    if [[ "${FP_CI_TSAN:-0}" == 1 ]]; then
+      timed tsan run_tsan_tests || failures+=("thread sanitizer tests")
+    fi
+    timed fuzz run_fuzzers || failures+=("fuzzers")
     section "Summary"
+    echo "stage times: ${stage_times[*]}"
     if [[ ${#failures[@]} -gt 0 ]]; then
       echo "FAILED: ${failures[*]}"
       exit 1
