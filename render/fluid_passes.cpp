@@ -160,38 +160,10 @@ void FluidRenderer::Impl::drawDepth(const ViewParams& v) {
   }
 }
 
-void FluidRenderer::Impl::blurThickness(const ViewParams& v) {
-  const RenderSettings& s = *v.settings;
-  if (s.thicknessBlur <= 0.0f || !particleCount)
-    return;
-  glDisable(GL_DEPTH_TEST);
-  glViewport(0, 0, halfWidth, halfHeight);
-  thicknessBlur.use();
-  thicknessBlur.set("uThickness", 0);
-  thicknessBlur.set("uDepth", 1);
-  thicknessBlur.set("uPixelsPerMetre", 0.5f * v.projection(1, 1) * 0.5f * float(height));
-  thicknessBlur.set("uBlur", s.thicknessBlur);
-  thicknessBlur.set("uFineRadius", fineRadius);
-  thicknessBlur.set("uMaxTaps", 8);
-  const GLint direction = glGetUniformLocation(thicknessBlur.id(), "uDirection");
-  glActiveTexture(GL_TEXTURE1);
-  glBindTexture(GL_TEXTURE_2D, fluidDepth[0].id);
-  glActiveTexture(GL_TEXTURE0);
-  glBindVertexArray(emptyVao.id);
-  const GLuint from[2] = {thickness.id, thicknessTmp.id};
-  const GLuint into[2] = {thicknessTmpFbo.id, thicknessFbo.id};
-  for (int dir = 0; dir < 2; ++dir) {
-    glBindFramebuffer(GL_FRAMEBUFFER, into[dir]);
-    glBindTexture(GL_TEXTURE_2D, from[dir]);
-    glUniform2i(direction, dir == 0 ? 1 : 0, dir == 0 ? 0 : 1);
-    glDrawArrays(GL_TRIANGLES, 0, 3);
-  }
-  glViewport(0, 0, width, height);
-}
-
 void FluidRenderer::Impl::filterDepth(const ViewParams& v) {
   const RenderSettings& s = *v.settings;
   surface = 0;
+  smoothedThickness = false;
   if (s.filterIterations <= 0)
     return;
   const bool half = s.filterHalfResolution;
@@ -208,7 +180,11 @@ void FluidRenderer::Impl::filterDepth(const ViewParams& v) {
     depthDown.set("uDepth", 0);
     depthDown.set("uRange", s.filterRange);
     depthDown.set("uFineRadius", fineRadius);
+    depthDown.set("uThickness", 1);
     glBindFramebuffer(GL_FRAMEBUFFER, halfFbo[0].id);
+    glActiveTexture(GL_TEXTURE1);
+    glBindTexture(GL_TEXTURE_2D, thickness.id);
+    glActiveTexture(GL_TEXTURE0);
     glBindTexture(GL_TEXTURE_2D, fluidDepth[0].id);
     glDrawArrays(GL_TRIANGLES, 0, 3);
     fbo = halfFbo;
@@ -222,6 +198,7 @@ void FluidRenderer::Impl::filterDepth(const ViewParams& v) {
   filter.set("uMaxTaps", s.filterMaxTaps);
   filter.set("uMaxPixels", scale * s.filterMaxPixels);
   filter.set("uRange", s.filterRange);
+  filter.set("uThicknessBlur", half ? s.thicknessBlur : 0.0f);
   const GLint direction = glGetUniformLocation(filter.id(), "uDirection");
   for (int it = 0; it < s.filterIterations; ++it) {
     for (int dir = 0; dir < 2; ++dir) {
@@ -246,6 +223,7 @@ void FluidRenderer::Impl::filterDepth(const ViewParams& v) {
     glDrawArrays(GL_TRIANGLES, 0, 3);
     glActiveTexture(GL_TEXTURE0);
     surface = 1;
+    smoothedThickness = s.thicknessBlur > 0.0f;
   }
 }
 
@@ -260,7 +238,9 @@ void FluidRenderer::Impl::drawComposite(const ViewParams& v) {
   composite.set("uAbsorption", s.absorption);
   composite.set("uRefraction", s.refraction);
   composite.set("uHighlightDensity", s.highlightStrength / std::max(maxRadius, 1e-6f));
-  const GLuint inputs[4] = {sceneColor.id, sceneDepth.id, fluidDepth[surface].id, thickness.id};
+  composite.set("uThicknessInBA", int(smoothedThickness));
+  const GLuint inputs[4] = {sceneColor.id, sceneDepth.id, fluidDepth[surface].id,
+                            smoothedThickness ? halfDepth[0].id : thickness.id};
   const char* names[4] = {"uSceneColor", "uSceneDepth", "uFluidDepth", "uThickness"};
   for (int k = 0; k < 4; ++k) {
     glActiveTexture(GLenum(GL_TEXTURE0 + k));

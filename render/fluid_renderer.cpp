@@ -62,7 +62,6 @@ FluidRenderer::Impl::Impl(const std::string& dir)
       filter(dir, "fullscreen.vert", "depth_filter.frag"),
       depthDown(dir, "fullscreen.vert", "depth_down.frag"),
       depthUp(dir, "fullscreen.vert", "depth_up.frag"),
-      thicknessBlur(dir, "fullscreen.vert", "thickness_blur.frag"),
       composite(dir, "fullscreen.vert", "fluid_composite.frag"),
       overlay(dir, "overlay.vert", "overlay.frag") {
   sphereAttributes(particleVao, particleVbo);
@@ -91,9 +90,8 @@ void FluidRenderer::Impl::resize(int w, int h) {
   halfWidth = (w + 1) / 2;
   halfHeight = (h + 1) / 2;
   thickness.create(GL_RG16F, halfWidth, halfHeight, GL_RG, GL_FLOAT, GL_LINEAR);
-  thicknessTmp.create(GL_RG16F, halfWidth, halfHeight, GL_RG, GL_FLOAT, GL_LINEAR);
   for (Texture& t : halfDepth)
-    t.create(GL_RG32F, halfWidth, halfHeight, GL_RG, GL_FLOAT, GL_NEAREST);
+    t.create(GL_RGBA32F, halfWidth, halfHeight, GL_RGBA, GL_FLOAT, GL_LINEAR);
   finalColor.create(GL_RGBA8, w, h, GL_RGBA, GL_UNSIGNED_BYTE, GL_NEAREST);
   finalDepth.create(GL_DEPTH_COMPONENT32F, w, h, GL_DEPTH_COMPONENT, GL_FLOAT, GL_NEAREST);
   sceneFbo.build(sceneColor, &sceneDepth, "scene");
@@ -105,7 +103,6 @@ void FluidRenderer::Impl::resize(int w, int h) {
   halfFbo[1].build(halfDepth[1], nullptr, "half filter 1");
   // the thickness pass samples the scene's depth instead of testing against it (other size)
   thicknessFbo.build(thickness, nullptr, "thickness");
-  thicknessTmpFbo.build(thicknessTmp, nullptr, "thickness blur");
   finalFbo.build(finalColor, &finalDepth, "final");
 }
 
@@ -320,7 +317,6 @@ void FluidRenderer::renderView(const Mat4& view, const Mat4& projection, const R
     mark(m_times.thickness);
     r.drawDepth(v);
     mark(m_times.depth);
-    r.blurThickness(v);
     r.filterDepth(v);
     mark(m_times.filter);
     r.drawComposite(v);

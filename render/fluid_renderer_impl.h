@@ -25,7 +25,7 @@ struct ViewParams {
 
 struct FluidRenderer::Impl {
   ShaderProgram sky, mesh, floor, glass, sphereDepth, sphereWet, sphereThickness, sphereColor, spray, filter,
-      depthDown, depthUp, thicknessBlur, composite, overlay;
+      depthDown, depthUp, composite, overlay;
 
   VertexArray emptyVao;
   VertexArray particleVao, sprayVao, floorVao, overlayVao, wetVao;
@@ -63,10 +63,10 @@ struct FluidRenderer::Impl {
   int width = 0, height = 0;
   int halfWidth = 0, halfHeight = 0;  // of the thickness pass
   Texture sceneColor, sceneDepth, fluidDepth[2], thickness, finalColor, finalDepth;
-  Texture halfDepth[2];  // the half-resolution filter's ping-pong
-  Texture thicknessTmp;  // the thickness blur's intermediate
-  Framebuffer sceneFbo, depthFbo, filterFbo[2], halfFbo[2], thicknessFbo, thicknessTmpFbo, finalFbo;
-  int surface = 0;  // which of fluidDepth holds the filtered surface of the last view
+  Texture halfDepth[2];  // the half-resolution filter's ping-pong: depth, radius, thickness (RGBA)
+  Framebuffer sceneFbo, depthFbo, filterFbo[2], halfFbo[2], thicknessFbo, finalFbo;
+  int surface = 0;                 // which of fluidDepth holds the filtered surface of the last view
+  bool smoothedThickness = false;  // the thickness of the last view is in halfDepth[0].ba, else in thickness
 
   explicit Impl(const std::string& dir);
   void resize(int w, int h);
@@ -87,8 +87,6 @@ struct FluidRenderer::Impl {
   /// 4. the depth filter, at half resolution (reduced, filtered, interpolated back) or at full resolution,
   /// ping-ponging between two depth textures; the result is in fluidDepth[surface]
   void filterDepth(const ViewParams& v);
-  /// 4'. the thickness blurred at a width set by the finest radius (after the depth pass, which it reads)
-  void blurThickness(const ViewParams& v);
   /// 5. shading of the water into the final image
   void drawComposite(const ViewParams& v);
   /// 5'. the particle view: lit spheres coloured by the inspected field, spray in green

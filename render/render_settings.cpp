@@ -35,7 +35,11 @@ RenderSettingsTable::RenderSettingsTable() : sim::ParamTableOf<RenderSettings>("
       "filter the depth at half resolution (cheaper, smoother at high resolution)", &R::filterHalfResolution,
       true);
   add("thickness_blur", "water", "r", 0.0, 20.0, true,
-      "sigma of the thickness blur in fine particle radii (0: off)", &R::thicknessBlur, 3.0f);
+      "sigma of the thickness blur in fine radii, each filter pass at half resolution (0: off)",
+      &R::thicknessBlur, 2.0f);
+  add("wet_reach", "water", "r", 0.0, 10.0, true,
+      "spheres this many radii from a side of the glass wet it (flat water at the glass; 0: off)",
+      &R::wetReach, 2.0f);
   add("refraction", "water", "-", 0.0, 1.0, true,
       "screen-space refraction offset at full thickness (view units)", &R::refraction, 0.04f);
 }

@@ -30,16 +30,16 @@ struct RenderSettings {
   float filterMaxPixels;      ///< cap on the filter half-width [px]
   float filterRange;          ///< depth range kept by the filter, in fine particle radii
   bool filterHalfResolution;  ///< filter the depth at half resolution (else at full resolution)
-  float thicknessBlur;        ///< sigma of the thickness blur in fine particle radii (0: off)
-  float refraction;           ///< screen-space refraction offset at full thickness [view units]
+  float thicknessBlur;  ///< sigma of the thickness blur in fine radii, each filter pass (half resolution; 0:
+                        ///< off)
+  float wetReach;       ///< spheres whose centre is this many radii from a side of the glass wet it (0: off)
+  float refraction;     ///< screen-space refraction offset at full thickness [view units]
 
   bool autoRange = true;  ///< particle view: range from the parameters, else colorRange
   ColorRange colorRange;  ///< particle view range when autoRange is off
   Eigen::Vector3f absorption{2.2f, 0.55f, 0.3f};  ///< Beer-Lambert coefficient per channel [1/m]
   int filterMaxTaps = 12;  ///< most sample pairs a pixel and filter pass; a wider filter strides, >= 1
-  float wetReach =
-      3.0f;              ///< spheres whose centre is this many radii from a side of the glass wet it (0: off)
-  bool profile = false;  ///< finish each pass and time it (slower; for the benchmark)
+  bool profile = false;    ///< finish each pass and time it (slower; for the benchmark)
 };
 
 /// The table of the render settings, immutable. For the command line:

@@ -7,8 +7,11 @@
 // pair with a background sample is skipped: silhouettes stay where they are.
 // The width is set by the finest particle radius in world space, the same for fine and coarse particles, so
 // the surface has one smoothing scale where resolutions meet.
+// At half resolution the texture also holds the thickness (B; A: its freshly split part, kept as drawn): the
+// same taps blur it with a Gaussian of uThicknessBlur fine radii, so that coarse particles, whose summed
+// chords show their large spacing as blotches, give the water the colour fine ones give.
 in vec2 vUv;
-uniform sampler2D uDepth;       // RG: eye depth [m] (0: no fluid), particle radius [m]
+uniform sampler2D uDepth;       // RG: eye depth [m] (0: no fluid), particle radius [m]; BA: thickness
 uniform ivec2 uDirection;       // (1, 0) or (0, 1)
 uniform float uPixelsPerMetre;  // at eye depth 1 m
 uniform float uRadius;          // half-width in fine particle radii
@@ -16,12 +19,13 @@ uniform float uFineRadius;      // [m]
 uniform float uMaxPixels;       // cap on the half-width
 uniform float uRange;           // kept depth range in fine particle radii
 uniform int uMaxTaps;           // most sample pairs a pixel
-out vec2 fDepth;
+uniform float uThicknessBlur;   // sigma of the thickness blur in fine radii, 0: none
+out vec4 fDepth;
 
 void main() {
   ivec2 p = ivec2(gl_FragCoord.xy);
   ivec2 last = textureSize(uDepth, 0) - 1;
-  vec2 c = texelFetch(uDepth, p, 0).xy;
+  vec4 c = texelFetch(uDepth, p, 0);
   if (c.x <= 0.0) {
     fDepth = c;
     return;
@@ -36,11 +40,19 @@ void main() {
   float range = uRange * uFineRadius * w0 * w0;
   float sum = 0.0;
   float weights = 1.0;
+  float sigmaT = max(uThicknessBlur * uFineRadius * uPixelsPerMetre / c.x, 1e-3);
+  float tsum = c.z;
+  float tweights = 1.0;
   for (int i = 1; i <= n; ++i) {
     float x = floor(float(i) * stride + 0.5);
     ivec2 o = int(x) * uDirection;
-    float za = texelFetch(uDepth, clamp(p + o, ivec2(0), last), 0).x;
-    float zb = texelFetch(uDepth, clamp(p - o, ivec2(0), last), 0).x;
+    vec4 a = texelFetch(uDepth, clamp(p + o, ivec2(0), last), 0);
+    vec4 b = texelFetch(uDepth, clamp(p - o, ivec2(0), last), 0);
+    float wt = uThicknessBlur > 0.0 ? exp(-x * x / (2.0 * sigmaT * sigmaT)) : 0.0;
+    tsum += wt * (a.z + b.z);
+    tweights += 2.0 * wt;
+    float za = a.x;
+    float zb = b.x;
     if (za <= 0.0 || zb <= 0.0) continue;
     // deviation of the pair's mean from the centre, in inverse depth (> 0: in front)
     float d = 0.5 * (1.0 / za + 1.0 / zb) - w0;
@@ -50,5 +62,5 @@ void main() {
     sum += 2.0 * w * d;
     weights += 2.0 * w;
   }
-  fDepth = vec2(1.0 / (w0 + sum / weights), c.y);
+  fDepth = vec4(1.0 / (w0 + sum / weights), c.y, tsum / tweights, c.w);
 }

@@ -7,7 +7,8 @@ in vec2 vUv;
 uniform sampler2D uSceneColor;
 uniform sampler2D uSceneDepth;  // window depth of the scene
 uniform sampler2D uFluidDepth;  // RG: filtered eye depth [m] (0: none), particle radius [m]
-uniform sampler2D uThickness;   // RG: water crossed [m], of it freshly split [m]; half resolution
+uniform sampler2D uThickness;   // half resolution: water crossed [m], of it freshly split [m], in RG or BA
+uniform bool uThicknessInBA;    // the half-resolution filter's texture, thickness smoothed
 uniform mat4 uProj;
 uniform mat4 uInvView;
 uniform vec3 uAbsorption;       // [1/m]
@@ -53,7 +54,8 @@ void main() {
   if (dot(n, v) < 0.0) n = -n;
 
   vec2 uv = (vec2(p) + 0.5) / vec2(gSize);
-  vec2 thickness = textureLod(uThickness, uv, 0.0).xy;
+  vec4 t4 = textureLod(uThickness, uv, 0.0);
+  vec2 thickness = uThicknessInBA ? t4.zw : t4.xy;
   float radius = fluid.y;
   vec2 refracted = uv - n.xy * uRefraction * (1.0 - exp(-thickness.x / (8.0 * radius)));
   vec3 behind = textureLod(uSceneColor, clamp(refracted, vec2(0.0), vec2(1.0)), 0.0).rgb;

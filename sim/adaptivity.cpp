@@ -260,8 +260,11 @@ AdaptivityStats Adaptivity::adapt(const AdaptContext& ctx, bool ignoreDelay) {
   auto ratio = [&](std::size_t i) { return p.m[i] / p.mOpt[i]; };
   // the split delay counts solver steps, whatever the adaptation period
   const std::uint32_t period = std::uint32_t(std::max(1, params.adaptationPeriod));
-  for (std::size_t i = 0; i < n; ++i)
-    p.heavySteps[i] = ratio(i) >= Real(params.splitAbove) ? p.heavySteps[i] + period : 0;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t i = r.begin(); i < r.end(); ++i)
+                        p.heavySteps[i] = ratio(i) >= Real(params.splitAbove) ? p.heavySteps[i] + period : 0;
+                    });
 
   // merge n:(n-1): a too-light particle goes into its nearest light neighbours
   for (std::size_t i = 0; i < n; ++i) {

@@ -426,6 +426,12 @@ void DfsphSolver::resizeCache(std::vector<Real>& cache, std::size_t n) {
   cache.resize(n);
 }
 
+void DfsphSolver::shrinkToFit() {
+  for (std::vector<Real>* v : {&m_factor, &m_rate, &m_k, &m_gradF, &m_gradB})
+    v->shrink_to_fit();
+  m_normal.shrink_to_fit();
+}
+
 std::size_t DfsphSolver::memoryBytes() const {
   return (m_factor.capacity() + m_rate.capacity() + m_k.capacity() + m_gradF.capacity() +
           m_gradB.capacity()) *

@@ -55,6 +55,8 @@ class DfsphSolver {
   void resetBoundaryImpulse() { m_boundaryImpulse.setZero(); }
   /// bytes held by scratch arrays
   std::size_t memoryBytes() const;
+  /// releases scratch capacity beyond the current particle and pair counts
+  void shrinkToFit();
 
  private:
   /// rate of change of the normalised density from the current velocities into m_rate [1/s], with the

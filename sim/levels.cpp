@@ -1,6 +1,7 @@
 #include "sim/levels.h"
 
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <atomic>
@@ -170,15 +171,20 @@ void LevelEstimator::startDistance(ParticleSet& p, Real cap, Real hop, int& pass
   // starts at the cap, and the first call runs to convergence.
   const std::size_t n = p.size();
   m_phiNext.resize(n);
-  bool fresh = false;
-  for (std::size_t i = 0; i < n; ++i) {
-    if (p.flags[i] & kFlagSurface) {
-      p.phi[i] = 0;
-    } else if (!(p.phi[i] < cap)) {
-      fresh |= !std::isfinite(p.phi[i]);
-      p.phi[i] = cap;
+  std::atomic<bool> fresh{false};
+  tbb::parallel_for(Range(0, n, kGrain), [&](const Range& r) {
+    bool local = false;
+    for (std::size_t i = r.begin(); i < r.end(); ++i) {
+      if (p.flags[i] & kFlagSurface) {
+        p.phi[i] = 0;
+      } else if (!(p.phi[i] < cap)) {
+        local |= !std::isfinite(p.phi[i]);
+        p.phi[i] = cap;
+      }
     }
-  }
+    if (local)
+      fresh = true;
+  });
   passes = fresh ? std::min(kMaxPropagationPasses, int(std::ceil(cap / hop)) + 1) : kPassesPerStep;
 }
 
@@ -268,10 +274,17 @@ void LevelEstimator::compute(ParticleSet& p, const NeighborList& fluidNbrs, cons
   const bool cflLimit = dynamic && params.cflLimitedRefinement;
   double surfaceSpeed2 = 0.0;
   if (cflLimit) {
-    for (std::size_t i = 0; i < n; ++i) {
-      if (p.phi[i] <= Real(lo))
-        surfaceSpeed2 = std::max(surfaceSpeed2, double(p.v[i].squaredNorm()));
-    }
+    // a maximum: exact in any order
+    surfaceSpeed2 = tbb::parallel_reduce(
+        Range(0, n, kGrain), 0.0,
+        [&](const Range& rg, double acc) {
+          for (std::size_t i = rg.begin(); i < rg.end(); ++i) {
+            if (p.phi[i] <= Real(lo))
+              acc = std::max(acc, double(p.v[i].squaredNorm()));
+          }
+          return acc;
+        },
+        [](double a, double b) { return std::max(a, b); });
   }
   // a margin for particles that speed up between the levels and their split
   constexpr double kCflSpeedMargin = 1.1;

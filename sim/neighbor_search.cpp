@@ -1,6 +1,7 @@
 #include "sim/neighbor_search.h"
 
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <cmath>
@@ -111,6 +112,26 @@ void NeighborSearch::build(const UniformGrid& grid, const std::vector<Vec3>& qx,
   // The largest support in each cell of every source with per-point supports (0 where empty): a fine
   // particle then skips the cells of the coarsest reach that hold only fine particles. The lists come out
   // the same, in the same order.
+  // every source's bounding box, widened by the margin (an empty source gets an empty box)
+  std::vector<Eigen::AlignedBox<Real, 3>> bounds(sources.size());
+  for (std::size_t s = 0; s < sources.size(); ++s) {
+    const std::size_t count = sources[s].cellStart->empty() ? 0 : sources[s].cellStart->back();
+    const Vec3* sx = sources[s].x;
+    using Box = Eigen::AlignedBox<Real, 3>;
+    Box box = tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, count, 4096), Box(),
+        [&](const tbb::blocked_range<std::size_t>& r, Box acc) {
+          for (std::size_t j = r.begin(); j < r.end(); ++j)
+            acc.extend(sx[j]);
+          return acc;
+        },
+        [](Box a, const Box& b) { return a.extend(b); });
+    if (!box.isEmpty()) {
+      box.min().array() -= margin;
+      box.max().array() += margin;
+    }
+    bounds[s] = box;
+  }
   m_cellMaxH.resize(sources.size());
   for (std::size_t s = 0; s < sources.size(); ++s) {
     if (!sources[s].H)
@@ -160,6 +181,10 @@ void NeighborSearch::build(const UniformGrid& grid, const std::vector<Vec3>& qx,
         // the largest pair support this particle can have with this source
         const Real hMax = Real(0.5) * (Hi + (src.H ? maxH : src.uniformH));
         const Real hMax2 = hMax * hMax;
+        // a source wholly out of reach (the hand, far from most of the water) costs no row at all
+        if ((xi - xi.cwiseMax(bounds[std::size_t(s)].min()).cwiseMin(bounds[std::size_t(s)].max()))
+                .squaredNorm() >= hMax2)
+          continue;
         const int reach = std::max(1, int(std::ceil(hMax * invCell)));
         const int x0 = std::max(0, c.x() - reach), x1 = std::min(dims.x() - 1, c.x() + reach);
         const int y0 = std::max(0, c.y() - reach), y1 = std::min(dims.y() - 1, c.y() + reach);
@@ -228,9 +253,10 @@ void NeighborSearch::build(const UniformGrid& grid, const std::vector<Vec3>& qx,
   };
 
   for (std::size_t chunk = 0; chunk < nChunks; ++chunk) {
-    // last build's count with a quarter of slack; a chunk never seen gets a guess
+    // last build's count with a sixteenth of slack (a chunk that outgrows it spills, see above); a chunk
+    // never seen gets a guess
     const std::size_t last = out.chunkCounts[chunk];
-    const std::size_t room = last > 0 ? last + last / 4 + 64 : 32 * kChunk;
+    const std::size_t room = last > 0 ? last + last / 16 + 64 : 32 * kChunk;
     roomStart[chunk + 1] = roomStart[chunk] + room;
   }
   const std::size_t total = roomStart[nChunks];

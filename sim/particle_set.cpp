@@ -58,6 +58,13 @@ void ParticleSet::clear() {
   m_nextId = 0;
 }
 
+void ParticleSet::shrinkToFit() {
+  forEachField([](auto& field, auto& scratch) {
+    field.shrink_to_fit();
+    scratch.shrink_to_fit();
+  });
+}
+
 void ParticleSet::reserve(std::size_t n) {
   forEachField([n](auto& field, auto&) { field.reserve(n); });
 }

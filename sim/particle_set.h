@@ -46,6 +46,8 @@ class ParticleSet {
   void clear();
   /// reserves room for n particles in every field
   void reserve(std::size_t n);
+  /// releases capacity beyond the particle count in every field
+  void shrinkToFit();
   /// reorders all fields so that new index k holds old particle order[k]; `order` is a permutation
   void permute(const std::vector<std::uint32_t>& order);
   /// the next unused stable id

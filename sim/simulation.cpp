@@ -1,6 +1,7 @@
 #include "sim/simulation.h"
 
 #include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
@@ -112,6 +113,14 @@ Simulation::Simulation(const SceneDesc& scene) : m_scene(scene), m_params(scene.
   m_dt = Real(m_params.dtMax);
   if (m_mode != AdaptivityMode::UniformHigh)
     relax(m_params.initialRelaxation);
+  // The modes with coarse particles searched the whole fine lattice once (coarsenInitialLattice): its
+  // capacity would stay as spare memory for the whole run.
+  m_fluid.shrinkToFit();
+  for (NeighborList* list : {&m_fluidNbrs, &m_boundaryNbrs}) {
+    list->indices.shrink_to_fit();
+    list->offsets.shrink_to_fit();
+  }
+  m_solver.shrinkToFit();
 }
 
 void Simulation::relax(int steps) {
@@ -290,10 +299,13 @@ void Simulation::computeLevels(bool smooth) {
   // levels computed every k solver steps move the target as far as k steps of smoothing would
   const int k = std::max(1, m_params.adaptationPeriod) * std::max(1, m_params.levelsPeriod);
   const Real gamma = smooth ? Real(1.0 - std::pow(1.0 - m_params.massSmoothing, k)) : Real(1);
-  for (std::size_t i = 0; i < m_fluid.size(); ++i) {
-    const Real m = m_fluid.mOpt[i] + gamma * (m_target[i] - m_fluid.mOpt[i]);
-    m_fluid.mOpt[i] = std::clamp(m, mFine, std::max(mFine, mBase));
-  }
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m_fluid.size(), 4096),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                        const Real m = m_fluid.mOpt[i] + gamma * (m_target[i] - m_fluid.mOpt[i]);
+                        m_fluid.mOpt[i] = std::clamp(m, mFine, std::max(mFine, mBase));
+                      }
+                    });
 }
 
 AdaptivityStats Simulation::adaptResolution(bool ignoreDelay) {
@@ -499,7 +511,7 @@ std::size_t Simulation::memoryBytes() const {
          (m_order.capacity() + m_fluidCells.capacity() + m_staticCells.capacity() +
           m_kinematicCells.capacity()) *
              sizeof(std::uint32_t) +
-         m_grid.memoryBytes();
+         m_grid.memoryBytes() + m_search.memoryBytes();
 }
 
 }  // namespace fp::sim

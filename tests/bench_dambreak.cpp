@@ -543,7 +543,6 @@ void printSuite(std::ostream& out, const std::vector<SuiteRow>& rows, double dam
   const SuiteRow& fine1 = rows[1];
   const SuiteRow& shipped = rows[2];
   const SuiteRow& dam = rows[3];
-  const double steps2s = double(dam.steps) * kDefaultSimTime / std::max(dam.simSeconds, 1e-12);
   char text[240];
   out << "\nIssue #12 targets (this run):\n";
   auto line = [&](const char* name, double value, const char* goal, bool met) {
@@ -561,8 +560,15 @@ void printSuite(std::ostream& out, const std::vector<SuiteRow>& rows, double dam
        dam.wallPerSimSecond() <= 76.0);
   line("dam break: reference wall s per simulated s / ours", kRefWallPerSimSecond / dam.wallPerSimSecond(),
        ">= 2", kRefWallPerSimSecond / dam.wallPerSimSecond() >= 2.0);
-  line("dam break: time steps over 2 s (extrapolated from the span run)", steps2s, "<= 1300",
-       steps2s <= 1300.0);
+  if (damTime >= kDefaultSimTime) {
+    line("dam break: time steps over 2 s", double(dam.steps), "<= 1300", dam.steps <= 1300);
+  } else {
+    // the first tenths of a second run at the largest steps: a count over a short span says nothing of 2 s
+    std::snprintf(text, sizeof(text), "  %-58s %10.0f  goal %-12s %s\n",
+                  "dam break: time steps over the span", double(dam.steps), "<= 1300/2 s",
+                  "not comparable (span shorter than 2 s)");
+    out << text;
+  }
   line("dam break: bytes per fluid particle", dam.bytesPerParticle, "<= 400", dam.bytesPerParticle <= 400.0);
   const double speedup =
       fine2.usPerParticleStep > 0 ? fine1.usPerParticleStep / fine2.usPerParticleStep : 0.0;
@@ -570,7 +576,7 @@ void printSuite(std::ostream& out, const std::vector<SuiteRow>& rows, double dam
        speedup >= 1.9);
   if (damTime < kDefaultSimTime) {
     out << "  note: the dam break ran " << damTime << " s of the reference's " << kDefaultSimTime
-        << " s; its step count is extrapolated, and the early collapse is not the whole run\n";
+        << " s: the early collapse is not the whole run\n";
   }
 }
 

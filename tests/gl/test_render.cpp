@@ -390,12 +390,12 @@ TEST(ShaderErrorTest, AMissingShaderFileGivesAOneLineErrorNamingIt) {
 TEST(ShaderErrorTest, ABrokenShaderNamesTheFileAndLine) {
   render::OffscreenContext context(32, 32);
   const fs::path dir = copyShaders("fp_shaders_broken");
-  appendToLine(dir / "depth_filter.frag", 19, " float broken = undeclaredName;");
+  appendToLine(dir / "depth_filter.frag", 23, " float broken = undeclaredName;");
   try {
     render::FluidRenderer renderer(dir.string());
     FAIL() << "no error for a broken shader";
   } catch (const render::ShaderError& e) {
-    EXPECT_NE(std::string(e.what()).find("depth_filter.frag:19:"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("depth_filter.frag:23:"), std::string::npos) << e.what();
   }
   // a line of an included file is reported in that file
   const fs::path dir2 = copyShaders("fp_shaders_broken_include");

@@ -28,8 +28,8 @@ constexpr double kMinRestingCoverage = 0.98;
 constexpr double kMaxImageMeanDifference = 2.0;  // [levels]
 constexpr double kMaxWaterFractionOver = 0.01;
 // The renderer's part of it: the same uniform-high water drawn from particles at fluidplaying's resolutions
-// (coarsenedRestingTank) against the uniform-high particles, mean over the water's pixels (before the
-// thickness blur: 2.00 levels; with it 1.09).
+// (coarsenedRestingTank) against the uniform-high particles, mean over the water's pixels (without the
+// thickness smoothing: 2.00 levels; with it 0.98).
 constexpr double kMaxSameWaterMeanDifference = 1.5;  // [levels]
 // Creases (seams, rings, blobs): the share of interior water pixels whose normal turns by more than 20
 // degrees over 2 pixels, in a moving frame of fine and coarse particles (before: 0.17).

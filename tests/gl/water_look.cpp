@@ -81,6 +81,13 @@ int main(int argc, char** argv) {
         "uniform-high: mean %.2f levels over %zu water px (%.2f over the image), %.2f %% over 24 levels\n",
         scene.state.particles.size(), r.rmsNormalDegrees, c.meanLevels, c.waterPixels, c.imageMeanLevels,
         100.0 * c.fractionOver);
+    // the simulation's part: fluidplaying's own state against that water at about the same resolutions
+    const test::WaterDifference f =
+        test::compareWater(shot.image, shots[1].image, shot.depth, shots[1].depth, 24);
+    std::printf(
+        "fluidplaying state vs the coarsened uniform-high state: mean %.2f levels over %zu water px, %.2f %% "
+        "over 24 levels\n",
+        f.meanLevels, f.waterPixels, 100.0 * f.fractionOver);
     if (!pngDir.empty())
       render::writePng(pngDir + "/rest_coarsened.png", shot.image);
   }

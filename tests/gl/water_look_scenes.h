@@ -129,10 +129,6 @@ inline std::string applySetting(render::RenderSettings& s, const std::string& as
     s.filterMaxTaps = std::max(1, int(v));
     return "";
   }
-  if (name == "wet_reach") {
-    s.wetReach = v;
-    return "";
-  }
   return render::RenderSettingsTable::get().assign(s, assignment);
 }
 
