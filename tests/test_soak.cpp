@@ -172,6 +172,18 @@ SoakFigures soak(double seconds, double settle) {
       session.startReplay(track);
       cycleStart = t;
     }
+    // a long soak may not end within a session: with FP_SOAK_TRACE the figures so far every 10 simulated s
+    if (std::getenv("FP_SOAK_TRACE") && (frame + 1) % 600 == 0) {
+      f.frames = frame + 1;
+      f.simTime = t;
+      f.steps = sim.runStats().steps;
+      f.splits = sim.runStats().adaptivity.splits;
+      f.merges = sim.runStats().adaptivity.merges;
+      f.rssEnd = residentBytes();
+      f.simBytesEnd = double(sim.memoryBytes());
+      f.wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      std::cout << "--- so far: " << f << std::flush;
+    }
     session.setHandTarget(session.handPose());
     session.applyRequests();
     session.startSteps(1.0 / frameRate, std::numeric_limits<double>::infinity());
