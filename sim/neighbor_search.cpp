@@ -13,8 +13,10 @@
 namespace fp::sim {
 
 namespace {
-constexpr std::size_t kChunk = 512;  // query points per parallel task; fixed so lists are deterministic
-}
+// query points per parallel task; fixed so lists are deterministic, small enough that two threads share a
+// few thousand particles evenly (fine and coarse particles cost very differently)
+constexpr std::size_t kChunk = 128;
+}  // namespace
 
 void UniformGrid::setup(const Aabb& domain, Real cellSize, std::size_t maxCells) {
   if (!(cellSize > 0))
