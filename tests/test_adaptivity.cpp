@@ -193,6 +193,7 @@ TEST(AdaptivityTest, OrientationChoiceLowersTheSplitDensityErrorSmall) {
   std::uint64_t compared = 0;
   for (unsigned seed = 20; seed < 24; ++seed) {
     Neighbourhood nb(seed);
+    nb.params.splitBlendSteps = 0;  // the children's own densities (without the temporal blending's half)
     // the parents' densities as the solver sees them: the children are to reproduce them
     DfsphSolver solver;
     SolverContext ctx{nb.p, nb.boundary, nb.fluidNbrs, nb.boundaryNbrs, nb.params};
