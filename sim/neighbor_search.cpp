@@ -13,8 +13,10 @@
 namespace fp::sim {
 
 namespace {
-constexpr std::size_t kChunk = 512;  // query points per parallel task; fixed so lists are deterministic
-}
+// query points per parallel task; fixed so lists are deterministic, small enough that two threads share a
+// few thousand particles evenly (fine and coarse particles cost very differently)
+constexpr std::size_t kChunk = 128;
+}  // namespace
 
 void UniformGrid::setup(const Aabb& domain, Real cellSize, std::size_t maxCells) {
   if (!(cellSize > 0))
@@ -407,6 +409,16 @@ void NeighborSearch::build(const UniformGrid& grid, const std::vector<Vec3>& qx,
                         }
                       });
     out.indices.swap(merged);
+  }
+  // The first build's rooms are a guess (32 a query point, where walls give a handful), and lists shrink when
+  // coarse particles replace fine ones: capacity beyond what the next build's rooms need is released (the
+  // dam break's wall lists held 130 bytes a particle of it).
+  const std::size_t nextRooms = listStart[nChunks] + listStart[nChunks] / 16 + 64 * nChunks;
+  if (out.indices.capacity() > 2 * nextRooms) {
+    std::vector<std::uint32_t> fitted;
+    fitted.reserve(nextRooms + nextRooms / 16);
+    fitted.assign(out.indices.begin(), out.indices.end());
+    out.indices.swap(fitted);
   }
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nChunks, 1),
                     [&](const tbb::blocked_range<std::size_t>& cr) {
