@@ -94,6 +94,7 @@ double Adaptivity::splitError(const AdaptContext& ctx, std::size_t o, const std:
     e += tau * tau;
   }
   // tau_s: the children's density error against the parent's density
+  const Real blend = splitBlendWeight(0, ctx.params.splitBlendSteps);
   const double target = double(p.rho[o]) / double(rho0);
   for (const Vec3& xs : children) {
     double rho = 0.0;
@@ -109,7 +110,9 @@ double Adaptivity::splitError(const AdaptContext& ctx, std::size_t o, const std:
       const std::uint32_t b = ctx.boundaryNbrs.indices[k];
       rho += sb * double(ctx.boundary.psi[b]) * CubicSpline::w((xs - ctx.boundary.x[b]).norm(), Hsb);
     }
-    const double tau = rho - target;
+    // with temporal blending the solver sees the child's density moved (beta) towards the parent's, which
+    // at the split is the target: its error enters at (1 - beta)
+    const double tau = (1.0 - double(blend)) * (rho - target);
     e += tau * tau;
   }
   return e;
@@ -322,6 +325,9 @@ AdaptivityStats Adaptivity::adapt(const AdaptContext& ctx, bool ignoreDelay) {
       p.phi[c] = p.phi[o];
       p.omega[c] = p.omega[o];
       p.nu[c] = p.nu[o];
+      // temporal blending from the parent (blendSplitVelocities, blendSplitDensities)
+      p.parentId[c] = params.splitBlendSteps > 0 ? p.id[o] : kNoParent;
+      p.splitAge[c] = 0;
     }
     m_removed[o] = 1;
     m_locked[o] = 1;
@@ -365,6 +371,130 @@ void Adaptivity::blendSupports(ParticleSet& p, const SimParams& params, Real mFi
                         if (std::abs(h - target) < Real(1e-3) * target)
                           h = target;
                         p.H[i] = h;
+                      }
+                    });
+}
+
+namespace {
+
+/// The split children that still blend, grouped by parent: `index` holds their particle indices sorted by
+/// (parent id, index), `start` the first entry of each group and the end.
+struct BlendGroups {
+  std::vector<std::uint32_t> index;
+  std::vector<std::uint32_t> start;
+};
+
+BlendGroups blendGroups(const ParticleSet& p, int steps) {
+  BlendGroups g;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    if (p.parentId[i] != kNoParent && p.splitAge[i] < std::uint32_t(std::max(steps, 0)))
+      g.index.push_back(std::uint32_t(i));
+  }
+  std::sort(g.index.begin(), g.index.end(), [&](std::uint32_t a, std::uint32_t b) {
+    return p.parentId[a] != p.parentId[b] ? p.parentId[a] < p.parentId[b] : a < b;
+  });
+  for (std::size_t k = 0; k < g.index.size(); ++k) {
+    if (k == 0 || p.parentId[g.index[k]] != p.parentId[g.index[k - 1]])
+      g.start.push_back(std::uint32_t(k));
+  }
+  g.start.push_back(std::uint32_t(g.index.size()));
+  return g;
+}
+
+}  // namespace
+
+Real Adaptivity::splitBlendWeight(std::uint32_t age, int steps) {
+  if (steps <= 0 || age >= std::uint32_t(steps))
+    return 0;
+  return Real(0.5) * (Real(1) - Real(age) / Real(steps));
+}
+
+void Adaptivity::blendSplitVelocities(ParticleSet& p, const SimParams& params) {
+  const BlendGroups g = blendGroups(p, params.splitBlendSteps);
+  for (std::size_t k = 0; k + 1 < g.start.size(); ++k) {
+    double mass = 0.0;
+    Vec3d momentum = Vec3d::Zero();
+    for (std::uint32_t e = g.start[k]; e < g.start[k + 1]; ++e) {
+      const std::uint32_t s = g.index[e];
+      mass += double(p.m[s]);
+      momentum += double(p.m[s]) * p.v[s].cast<double>();
+    }
+    const Vec3d vParent = momentum / mass;
+    for (std::uint32_t e = g.start[k]; e < g.start[k + 1]; ++e) {
+      const std::uint32_t s = g.index[e];
+      const double beta = double(splitBlendWeight(p.splitAge[s], params.splitBlendSteps));
+      p.v[s] = (p.v[s].cast<double>() + beta * (vParent - p.v[s].cast<double>())).cast<Real>();
+    }
+  }
+}
+
+void Adaptivity::blendSplitDensities(ParticleSet& p, const NeighborList& fluidNbrs,
+                                     const NeighborList& boundaryNbrs, const BoundarySet& boundary,
+                                     const SimParams& params, Real mFine) {
+  const BlendGroups g = blendGroups(p, params.splitBlendSteps);
+  if (g.index.empty() || fluidNbrs.offsets.size() != p.size() + 1 ||
+      boundaryNbrs.offsets.size() != p.size() + 1)
+    return;
+  const double rho0 = params.restDensity;
+  const Real r = Real(params.particleRadius);
+  const Real Hb = boundary.support();
+  const std::size_t groups = g.start.size() - 1;
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, groups, 8), [&](const tbb::blocked_range<std::size_t>& rg) {
+        std::vector<std::uint32_t> members, fluid, walls;
+        for (std::size_t k = rg.begin(); k < rg.end(); ++k) {
+          members.assign(g.index.begin() + g.start[k], g.index.begin() + g.start[k + 1]);
+          std::sort(members.begin(), members.end());
+          double mass = 0.0;
+          Vec3d centre = Vec3d::Zero();
+          fluid.clear();
+          walls.clear();
+          for (std::uint32_t s : members) {
+            mass += double(p.m[s]);
+            centre += double(p.m[s]) * p.x[s].cast<double>();
+            for (std::uint32_t q = fluidNbrs.offsets[s]; q < fluidNbrs.offsets[s + 1]; ++q)
+              fluid.push_back(fluidNbrs.indices[q]);
+            for (std::uint32_t q = boundaryNbrs.offsets[s]; q < boundaryNbrs.offsets[s + 1]; ++q)
+              walls.push_back(boundaryNbrs.indices[q]);
+          }
+          centre /= mass;
+          for (std::vector<std::uint32_t>* list : {&fluid, &walls}) {
+            std::sort(list->begin(), list->end());
+            list->erase(std::unique(list->begin(), list->end()), list->end());
+          }
+          // the parent: its mass and the support of that mass, at the siblings' centre of mass
+          const Real Ho = supportForMass(Real(mass), mFine, r);
+          const Vec3 xo = centre.cast<Real>();
+          double density = mass / rho0 * double(CubicSpline::w0(Ho));
+          for (std::uint32_t j : fluid) {
+            if (std::binary_search(members.begin(), members.end(), j))
+              continue;
+            density +=
+                double(p.m[j]) / rho0 * double(CubicSpline::w((xo - p.x[j]).norm(), pairSupport(Ho, p.H[j])));
+          }
+          const Real Hob = pairSupport(Ho, Hb);
+          const double sb = double(boundary.volumeScale(Ho));
+          for (std::uint32_t b : walls)
+            density +=
+                sb * double(boundary.psi[b]) * double(CubicSpline::w((xo - boundary.x[b]).norm(), Hob));
+          const double rhoParent = density * rho0;
+          for (std::uint32_t s : members) {
+            const double beta = double(splitBlendWeight(p.splitAge[s], params.splitBlendSteps));
+            p.rho[s] = Real(double(p.rho[s]) + beta * (rhoParent - double(p.rho[s])));
+          }
+        }
+      });
+}
+
+void Adaptivity::ageSplitChildren(ParticleSet& p, const SimParams& params) {
+  const std::uint32_t steps = std::uint32_t(std::max(0, params.splitBlendSteps));
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, p.size(), 4096),
+                    [&](const tbb::blocked_range<std::size_t>& rg) {
+                      for (std::size_t i = rg.begin(); i < rg.end(); ++i) {
+                        if (p.parentId[i] == kNoParent)
+                          continue;
+                        if (++p.splitAge[i] >= steps)
+                          p.parentId[i] = kNoParent;
                       }
                     });
 }

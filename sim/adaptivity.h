@@ -77,11 +77,29 @@ class Adaptivity {
 
   /// Split error E (docs/method.md, Adaptivity) of placing the children of `o` at `children` (each of
   /// mass m_o / n and, as the split creates them, the parent's support), with the neighbourhood of the
-  /// context [-]
+  /// context, of the densities the solver then sees: with temporal blending on (`split_blend_steps` > 0) a
+  /// child's density error enters at (1 - splitBlendWeight(0)) of its own [-]
   static double splitError(const AdaptContext& ctx, std::size_t o, const std::vector<Vec3>& children);
 
   /// per particle, indexed as the particles were at the start of the last adapt() call: what it did there
   const std::vector<ParticleOps>& lastOperations() const { return m_ops; }
+
+  /// Temporal blending (docs/method.md, Adaptivity, after Winchenbach et al. 2017): weight beta of the
+  /// parent's value in a split child `age` solver steps after the split, 0.5 (1 - age / steps) while
+  /// age < steps, else 0 [-]
+  static Real splitBlendWeight(std::uint32_t age, int steps);
+  /// Blends each split child's velocity towards its parent's, the mass-weighted mean velocity of its
+  /// siblings (the parent's momentum, carried by the children): v_s += beta (v_parent - v_s). Conserves
+  /// momentum. Call before the densities of the step.
+  static void blendSplitVelocities(ParticleSet& p, const SimParams& params);
+  /// Blends each split child's density towards its parent's, evaluated at the siblings' moving centre of
+  /// mass with the parent's mass and support over the siblings' neighbours (rest volumes, boundary terms
+  /// scaled as in the solver): rho_s <- (1 - beta) rho_s + beta rho_parent. Call after the densities.
+  static void blendSplitDensities(ParticleSet& p, const NeighborList& fluidNbrs,
+                                  const NeighborList& boundaryNbrs, const BoundarySet& boundary,
+                                  const SimParams& params, Real mFine);
+  /// Ages every split child by one solver step; a child older than `split_blend_steps` stops blending.
+  static void ageSplitChildren(ParticleSet& p, const SimParams& params);
 
   /// bytes held
   std::size_t memoryBytes() const;

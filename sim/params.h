@@ -63,6 +63,7 @@ struct SimParams {
   double splitAbove;
   double transferRate;
   int supportBlendSteps;
+  int splitBlendSteps;
   // splash enhancement (docs/method.md, Splash): render-only post-process, never fed back into the simulation
   bool splashEnabled;
   int splashNeighbors;

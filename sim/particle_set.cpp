@@ -27,6 +27,8 @@ void ParticleSet::forEachField(F&& f) {
   f(omega, m_scratchReal);
   f(nu, m_scratchReal);
   f(heavySteps, m_scratchU32);
+  f(parentId, m_scratchU32);
+  f(splitAge, m_scratchU32);
 }
 
 std::size_t ParticleSet::add(const Vec3& position, const Vec3& velocity, Real mass, Real support,
@@ -50,6 +52,8 @@ std::size_t ParticleSet::add(const Vec3& position, const Vec3& velocity, Real ma
   omega.push_back(0);
   nu.push_back(0);
   heavySteps.push_back(0);
+  parentId.push_back(kNoParent);
+  splitAge.push_back(0);
   return x.size() - 1;
 }
 
@@ -118,6 +122,8 @@ std::size_t ParticleSet::memoryBytes() const {
   count(omega);
   count(nu);
   count(heavySteps);
+  count(parentId);
+  count(splitAge);
   bytes += m_scratchVec.capacity() * sizeof(Vec3) + m_scratchReal.capacity() * sizeof(Real) +
            m_scratchU32.capacity() * sizeof(std::uint32_t);
   return bytes;

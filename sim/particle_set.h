@@ -15,6 +15,9 @@ enum ParticleFlag : std::uint32_t {
   kFlagSplit = 1u << 1,    ///< created by a split (renderer highlight)
 };
 
+/// ParticleSet::parentId of a particle that blends from no parent.
+constexpr std::uint32_t kNoParent = ~std::uint32_t(0);
+
 /// Structure of arrays of the fluid particles.
 class ParticleSet {
  public:
@@ -37,6 +40,8 @@ class ParticleSet {
   std::vector<Real> omega;                ///< vorticity magnitude of the last adaptation step [1/s]
   std::vector<Real> nu;                   ///< velocity difference of the last adaptation step [m/s]
   std::vector<std::uint32_t> heavySteps;  ///< consecutive adaptation steps found too heavy (split delay)
+  std::vector<std::uint32_t> parentId;    ///< id of the parent a split child blends from, kNoParent if none
+  std::vector<std::uint32_t> splitAge;    ///< solver steps since the split that created the particle
 
   /// number of particles
   std::size_t size() const { return x.size(); }

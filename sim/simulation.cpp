@@ -135,6 +135,7 @@ void Simulation::relax(int steps) {
       v.setZero();
   }
   std::fill(m_fluid.splitTime.begin(), m_fluid.splitTime.end(), Real(-1));
+  std::fill(m_fluid.parentId.begin(), m_fluid.parentId.end(), kNoParent);
   for (std::uint32_t& f : m_fluid.flags)
     f &= ~std::uint32_t(kFlagSplit);
   m_time = 0.0;
@@ -435,9 +436,25 @@ void Simulation::step() {
 
   SolverContext ctx{m_fluid, m_boundary, m_fluidNbrs, m_boundaryNbrs, m_params};
   m_solver.resetBoundaryImpulse();
+  double blendTime = 0.0;
+  if (adaptive()) {
+    // temporal blending after a split (docs/method.md, Adaptivity): velocities before the densities, whose
+    // pass also gives the divergence solve its first density rates
+    Adaptivity::blendSplitVelocities(m_fluid, m_params);
+    const auto tb = Clock::now();
+    blendTime += seconds(t2, tb);
+    t2 = tb;
+  }
   st.densityError = m_solver.computeDensityAndFactor(ctx);
   auto t3 = Clock::now();
   st.times.density = seconds(t2, t3);
+  if (adaptive()) {
+    Adaptivity::blendSplitDensities(m_fluid, m_fluidNbrs, m_boundaryNbrs, m_boundary, m_params,
+                                    m_latticeMass);
+    const auto tb = Clock::now();
+    blendTime += seconds(t3, tb);
+    t3 = tb;
+  }
   const bool adaptNow =
       adaptive() && m_stepCount % std::uint64_t(std::max(1, m_params.adaptationPeriod)) == 0;
   // the levels of every levels_period-th adaptation step; the optimal masses are kept in between
@@ -477,6 +494,8 @@ void Simulation::step() {
   auto t8 = Clock::now();
   st.times.integrate = seconds(t5, t6) + seconds(t7, t8);
   if (adaptive()) {
+    // this step's split children have blended once more; then new ones may be created (age 0)
+    Adaptivity::ageSplitChildren(m_fluid, m_params);
     // the lists of this step's start still index the particles: nothing was reordered since
     if (adaptNow)
       st.adaptivity = adaptResolution(false);
@@ -489,7 +508,7 @@ void Simulation::step() {
       m_boundaryNbrs.indices.clear();
     }
     Adaptivity::blendSupports(m_fluid, m_params, m_latticeMass);
-    st.times.adaptation = seconds(t8, Clock::now());
+    st.times.adaptation = seconds(t8, Clock::now()) + blendTime;
   }
   ++m_stepCount;
   st.dt = dt;

@@ -290,6 +290,8 @@ class StateAccess {
     f(&ParticleSet::omega, "vorticities");
     f(&ParticleSet::nu, "velocity differences");
     f(&ParticleSet::heavySteps, "split delays");
+    f(&ParticleSet::parentId, "split parent ids");
+    f(&ParticleSet::splitAge, "split ages");
   }
   /// every per-particle array of the boundary, in file order: f(member, name)
   template <class F>

@@ -31,7 +31,7 @@ class StateError : public InputError {
 };
 
 /// version of the format written by this build
-constexpr std::uint32_t kStateVersion = 1;
+constexpr std::uint32_t kStateVersion = 2;
 
 /// FNV-1a hash of what a simulation is built from: domain, fluid blocks, colliders (meshes included),
 /// parameters as loaded, mode and frame rate (not the name nor the default run length)

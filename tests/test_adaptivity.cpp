@@ -280,6 +280,9 @@ TEST(AdaptivityTest, OrientationChoiceLowersTheSplitDensityErrorSmall) {
   for (unsigned seed = 20; seed < 24; ++seed) {
     Neighbourhood nb(seed);
     Neighbourhood ref(seed);
+    // the children's own densities (without the temporal blending's half)
+    nb.params.splitBlendSteps = 0;
+    ref.params.splitBlendSteps = 0;
     // the parents' densities as the solver sees them: the children are to reproduce them
     DfsphSolver solver;
     for (Neighbourhood* h : {&nb, &ref}) {
