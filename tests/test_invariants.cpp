@@ -28,7 +28,7 @@ TEST(InvariantsTest, HydrostaticPressureAcrossTheFineCoarseInterface) {
   const double rho0 = scene.params.restDensity;
   const double g = 9.81;
   const double slab = 4.0 * r;
-  constexpr int kSlabs = 10;
+  constexpr int kSlabs = 7;  // down to 0.137 m, 6 cm above the floor
   double pSum[kSlabs] = {}, hSum[kSlabs] = {}, mSum[kSlabs] = {}, mrSum[kSlabs] = {};
   int count[kSlabs] = {};
   int frames = 0;
@@ -86,14 +86,16 @@ TEST(InvariantsTest, HydrostaticPressureAcrossTheFineCoarseInterface) {
         "ratio %.3f) over %d samples\n",
         h, mass.back(), pMean, rho0 * g * h, residual.back(), pMean / (rho0 * g * h), count[k]);
   }
-  ASSERT_GE(residual.size(), 7u);
-  // Measured: ratios 0.977 to 1.093 (the coarse slabs scatter: their 3-fine-spacing layers alias with the
-  // 2-spacing slabs); bound 0.15.
+  ASSERT_GE(residual.size(), 6u);
+  // Bound per slab: 10 % of rho0 g h plus the pressure of half a fine radius of water (the free surface is
+  // known to about a radius). Measured: at most 0.33 of it (+10.9 Pa at 1 cm, +44.2 Pa at 13 cm).
+  const double surfaceSlack = 0.5 * rho0 * g * r;
   double fineSum = 0.0, coarseSum = 0.0;
   int fine = 0, coarse = 0;
   std::size_t interface = 0;
   for (std::size_t k = 0; k < residual.size(); ++k) {
-    EXPECT_NEAR(residual[k] / (rho0 * g * depth[k]), 0.0, 0.15) << "slab at depth " << depth[k];
+    EXPECT_LE(std::abs(residual[k]), 0.1 * rho0 * g * depth[k] + surfaceSlack)
+        << "slab at depth " << depth[k];
     if (mass[k] < 4.0) {
       fineSum += residual[k];
       ++fine;
