@@ -2,6 +2,7 @@
 
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
+#include <tbb/parallel_sort.h>
 
 #include <algorithm>
 #include <cmath>
@@ -12,8 +13,10 @@
 namespace fp::sim {
 
 namespace {
-constexpr std::size_t kChunk = 512;  // query points per parallel task; fixed so lists are deterministic
-}
+// query points per parallel task; fixed so lists are deterministic, small enough that two threads share a
+// few thousand particles evenly (fine and coarse particles cost very differently)
+constexpr std::size_t kChunk = 128;
+}  // namespace
 
 void UniformGrid::setup(const Aabb& domain, Real cellSize, std::size_t maxCells) {
   if (!(cellSize > 0))
@@ -47,28 +50,75 @@ Eigen::Vector3i UniformGrid::cellCoord(const Vec3& p) const {
 }
 
 void UniformGrid::sort(const Vec3* x, std::size_t n, std::vector<std::uint32_t>& order,
-                       std::vector<std::uint32_t>& cellStart) {
-  const std::size_t nc = cellCount();
-  m_cellOf.resize(n);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096),
-                    [&](const tbb::blocked_range<std::size_t>& r) {
-                      for (std::size_t i = r.begin(); i < r.end(); ++i) {
-                        const Eigen::Vector3i c = cellCoord(x[i]);
-                        m_cellOf[i] = linear(c.x(), c.y(), c.z());
-                      }
-                    });
-  cellStart.assign(nc + 1, 0);
-  for (std::size_t i = 0; i < n; ++i)
-    ++cellStart[m_cellOf[i] + 1];
-  for (std::size_t c = 0; c < nc; ++c)
-    cellStart[c + 1] += cellStart[c];
+                       std::vector<std::uint32_t>& cells) {
+  using Range = tbb::blocked_range<std::size_t>;
+  const std::uint32_t nx = std::uint32_t(m_dims.x());
+  const std::size_t nRows = std::size_t(m_dims.y()) * std::size_t(m_dims.z());
+  m_keys.resize(n);
+  tbb::parallel_for(Range(0, n, 4096), [&](const Range& r) {
+    for (std::size_t i = r.begin(); i < r.end(); ++i) {
+      const Eigen::Vector3i c = cellCoord(x[i]);
+      m_keys[i] = (std::uint64_t(linear(c.x(), c.y(), c.z())) << 32) | std::uint64_t(i);
+    }
+  });
+  // the keys are unique, so the sorted order is the same whatever the thread count (and the same as a stable
+  // counting sort's); the particles come in nearly sorted from the last step
+  tbb::parallel_sort(m_keys.begin(), m_keys.end());
   order.resize(n);
-  // scatter using cellStart[c] as a cursor, then shift back; stable in the original index
-  for (std::size_t i = 0; i < n; ++i)
-    order[cellStart[m_cellOf[i]]++] = std::uint32_t(i);
-  for (std::size_t c = nc; c > 0; --c)
-    cellStart[c] = cellStart[c - 1];
-  cellStart[0] = 0;
+  // the first sorted point of every row (rows are runs of nx cells), by bisection
+  m_rowFirst.resize(nRows + 1);
+  tbb::parallel_for(Range(0, nRows + 1, 256), [&](const Range& r) {
+    for (std::size_t row = r.begin(); row < r.end(); ++row) {
+      const std::uint64_t key = std::uint64_t(row) * nx << 32;
+      m_rowFirst[row] = std::uint32_t(std::lower_bound(m_keys.begin(), m_keys.end(), key) - m_keys.begin());
+    }
+  });
+  tbb::parallel_for(Range(0, n, 4096), [&](const Range& r) {
+    for (std::size_t k = r.begin(); k < r.end(); ++k)
+      order[k] = std::uint32_t(m_keys[k]);
+  });
+  // header, one word per row (a loop over rows, not points), then the starts of the non-empty rows
+  cells.resize(2 + nRows);
+  std::size_t pos = 2 + nRows;
+  for (std::size_t row = 0; row < nRows; ++row) {
+    if (m_rowFirst[row] == m_rowFirst[row + 1]) {
+      cells[2 + row] = 0;
+    } else {
+      cells[2 + row] = std::uint32_t(pos);
+      pos += nx + 1;
+    }
+  }
+  cells[0] = std::uint32_t(n);
+  cells[1] = std::uint32_t(nRows);
+  cells.resize(pos);
+  tbb::parallel_for(Range(0, nRows, 64), [&](const Range& r) {
+    for (std::size_t row = r.begin(); row < r.end(); ++row) {
+      const std::uint32_t off = cells[2 + row];
+      if (off == 0)
+        continue;
+      std::uint32_t* start = cells.data() + off;
+      std::uint32_t k = m_rowFirst[row];
+      const std::uint32_t end = m_rowFirst[row + 1];
+      const std::uint64_t base = std::uint64_t(row) * nx;
+      for (std::uint32_t cx = 0; cx < nx; ++cx) {
+        while (k < end && (m_keys[k] >> 32) < base + cx)
+          ++k;
+        start[cx] = k;
+      }
+      start[nx] = end;
+    }
+  });
+}
+
+std::pair<std::uint32_t, std::uint32_t> UniformGrid::cellRange(const std::vector<std::uint32_t>& cells,
+                                                               int cx, int cy, int cz) const {
+  const CellRanges ranges(cells);
+  if (ranges.count() == 0)
+    return {0, 0};
+  const std::uint32_t off = ranges.rowOffset(std::uint32_t(cz * m_dims.y() + cy));
+  if (off == 0)
+    return {0, 0};
+  return {cells[off + std::uint32_t(cx)], cells[off + std::uint32_t(cx) + 1]};
 }
 
 namespace {
@@ -115,7 +165,7 @@ void NeighborSearch::build(const UniformGrid& grid, const std::vector<Vec3>& qx,
   // every source's bounding box, widened by the margin (an empty source gets an empty box)
   std::vector<Eigen::AlignedBox<Real, 3>> bounds(sources.size());
   for (std::size_t s = 0; s < sources.size(); ++s) {
-    const std::size_t count = sources[s].cellStart->empty() ? 0 : sources[s].cellStart->back();
+    const std::size_t count = CellRanges(*sources[s].cellStart).count();
     const Vec3* sx = sources[s].x;
     using Box = Eigen::AlignedBox<Real, 3>;
     Box box = tbb::parallel_reduce(
@@ -133,22 +183,50 @@ void NeighborSearch::build(const UniformGrid& grid, const std::vector<Vec3>& qx,
     bounds[s] = box;
   }
   m_cellMaxH.resize(sources.size());
+  m_windowMaxH.resize(sources.size());
+  // every query's reach of a source with per-point supports is at most this many cells (queries with larger
+  // supports do without the window)
+  const int windowReach = std::max(1, int(std::ceil(maxH * invCell)));
+  const int nx = dims.x();
+  const std::size_t nRows = std::size_t(dims.y()) * std::size_t(dims.z());
   for (std::size_t s = 0; s < sources.size(); ++s) {
     if (!sources[s].H)
       continue;
-    const std::uint32_t* start = sources[s].cellStart->data();
+    const CellRanges ranges(*sources[s].cellStart);
+    if (ranges.count() == 0)
+      continue;
     const Real* sH = sources[s].H;
     std::vector<Real>& cellMax = m_cellMaxH[s];
-    cellMax.resize(sources[s].cellStart->size() - 1);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cellMax.size(), 16384),
-                      [&](const tbb::blocked_range<std::size_t>& r) {
-                        for (std::size_t c = r.begin(); c < r.end(); ++c) {
-                          Real h = 0;
-                          for (std::uint32_t j = start[c]; j < start[c + 1]; ++j)
-                            h = std::max(h, sH[j]);
-                          cellMax[c] = h;
-                        }
-                      });
+    std::vector<Real>& window = m_windowMaxH[s];
+    cellMax.resize(sources[s].cellStart->size());
+    window.resize(sources[s].cellStart->size());
+    // The largest support in each cell (0 where empty): a fine particle then skips the cells of the coarsest
+    // reach that hold only fine particles. The largest within `windowReach` cells along x of each cell: a
+    // whole row of the reach is then skipped with one load when none of its points can be a neighbour (the
+    // far rows of a fine particle's reach). The lists come out the same, in the same order.
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, nRows, 64), [&](const tbb::blocked_range<std::size_t>& r) {
+          for (std::size_t row = r.begin(); row < r.end(); ++row) {
+            const std::uint32_t off = ranges.rowOffset(std::uint32_t(row));
+            if (off == 0)
+              continue;
+            const std::uint32_t* start = ranges.data() + off;
+            Real* cm = cellMax.data() + off;
+            Real* wm = window.data() + off;
+            for (int cx = 0; cx < nx; ++cx) {
+              Real h = 0;
+              for (std::uint32_t j = start[cx]; j < start[cx + 1]; ++j)
+                h = std::max(h, sH[j]);
+              cm[cx] = h;
+            }
+            for (int cx = 0; cx < nx; ++cx) {
+              Real h = 0;
+              for (int k = std::max(0, cx - windowReach); k <= std::min(nx - 1, cx + windowReach); ++k)
+                h = std::max(h, cm[k]);
+              wm[cx] = h;
+            }
+          }
+        });
   }
   auto searchChunk = [&](std::size_t chunk) {
     const std::size_t room = roomStart[chunk + 1] - roomStart[chunk];
@@ -174,7 +252,7 @@ void NeighborSearch::build(const UniformGrid& grid, const std::vector<Vec3>& qx,
       for (int s = 0; s < int(sources.size()); ++s) {
         const GridPoints& src = sources[s];
         const Vec3* sx = src.x;
-        const std::uint32_t* start = src.cellStart->data();
+        const CellRanges ranges(*src.cellStart);
         const std::uint32_t skip =
             s == selfSource ? std::uint32_t(i) : std::numeric_limits<std::uint32_t>::max();
         const std::uint32_t offset = src.indexOffset;
@@ -186,6 +264,7 @@ void NeighborSearch::build(const UniformGrid& grid, const std::vector<Vec3>& qx,
                 .squaredNorm() >= hMax2)
           continue;
         const int reach = std::max(1, int(std::ceil(hMax * invCell)));
+        const bool windowed = reach <= windowReach;
         const int x0 = std::max(0, c.x() - reach), x1 = std::min(dims.x() - 1, c.x() + reach);
         const int y0 = std::max(0, c.y() - reach), y1 = std::min(dims.y() - 1, c.y() + reach);
         const int z0 = std::max(0, c.z() - reach), z1 = std::min(dims.z() - 1, c.z() + reach);
@@ -196,9 +275,20 @@ void NeighborSearch::build(const UniformGrid& grid, const std::vector<Vec3>& qx,
             const Real dyz2 = dy * dy + dz * dz;
             if (dyz2 >= hMax2)
               continue;
-            // a row with no point in the whole reach (most rows of the walls) costs two loads
-            const std::uint32_t rowBase = grid.linear(0, cy, cz);
-            if (start[rowBase + std::uint32_t(x0)] == start[rowBase + std::uint32_t(x1) + 1])
+            // a row with no point at all costs one load
+            const std::uint32_t rowBase = ranges.rowOffset(std::uint32_t(cz * dims.y() + cy));
+            if (rowBase == 0)
+              continue;
+            // a row whose largest support within the reach cannot reach i costs one more
+            if (src.H && windowed) {
+              const Real hw = Real(0.5) * (Hi + m_windowMaxH[std::size_t(s)][rowBase + std::uint32_t(c.x())]);
+              if (dyz2 >= hw * hw)
+                continue;
+            }
+            // the row's cell starts; a row with no point in the whole reach (most rows of the walls) costs
+            // two
+            const std::uint32_t* start = ranges.data() + rowBase;
+            if (start[x0] == start[x1 + 1])
               continue;
             // the cells of the row that the largest support reaches
             const Real w = std::sqrt(hMax2 - dyz2) + margin;
@@ -208,11 +298,22 @@ void NeighborSearch::build(const UniformGrid& grid, const std::vector<Vec3>& qx,
               continue;
             if (!src.H) {
               // cells rx0..rx1 of one row are contiguous in the sorted arrays
-              const std::uint32_t b = start[rowBase + std::uint32_t(rx0)];
-              const std::uint32_t e = start[rowBase + std::uint32_t(rx1) + 1];
-              for (std::uint32_t j = b; j < e; ++j) {
-                if (j != skip && (xi - sx[j]).squaredNorm() < hMax2)
-                  emit(j + offset);
+              const std::uint32_t b = start[rx0];
+              const std::uint32_t e = start[rx1 + 1];
+              if (count + (e - b) <= room) {
+                // room for every candidate: written unconditionally, kept by advancing the count
+                std::uint32_t* o = dst + count;
+                std::size_t kept = 0;
+                for (std::uint32_t j = b; j < e; ++j) {
+                  o[kept] = j + offset;
+                  kept += std::size_t((j != skip) & ((xi - sx[j]).squaredNorm() < hMax2));
+                }
+                count += kept;
+              } else {
+                for (std::uint32_t j = b; j < e; ++j) {
+                  if (j != skip && (xi - sx[j]).squaredNorm() < hMax2)
+                    emit(j + offset);
+                }
               }
               continue;
             }
@@ -234,13 +335,24 @@ void NeighborSearch::build(const UniformGrid& grid, const std::vector<Vec3>& qx,
             if (cx0 > cx1)
               continue;
             // cells cx0..cx1 of one row are contiguous in the sorted arrays
-            const std::uint32_t b = start[rowBase + std::uint32_t(cx0)];
-            const std::uint32_t e = start[rowBase + std::uint32_t(cx1) + 1];
+            const std::uint32_t b = start[cx0];
+            const std::uint32_t e = start[cx1 + 1];
             const Real* sH = src.H;
-            for (std::uint32_t j = b; j < e; ++j) {
-              const Real h = Real(0.5) * (Hi + sH[j]);
-              if (j != skip && (xi - sx[j]).squaredNorm() < h * h)
-                emit(j + offset);
+            if (count + (e - b) <= room) {
+              std::uint32_t* o = dst + count;
+              std::size_t kept = 0;
+              for (std::uint32_t j = b; j < e; ++j) {
+                const Real h = Real(0.5) * (Hi + sH[j]);
+                o[kept] = j + offset;
+                kept += std::size_t((j != skip) & ((xi - sx[j]).squaredNorm() < h * h));
+              }
+              count += kept;
+            } else {
+              for (std::uint32_t j = b; j < e; ++j) {
+                const Real h = Real(0.5) * (Hi + sH[j]);
+                if (j != skip && (xi - sx[j]).squaredNorm() < h * h)
+                  emit(j + offset);
+              }
             }
           }
         }
@@ -297,6 +409,16 @@ void NeighborSearch::build(const UniformGrid& grid, const std::vector<Vec3>& qx,
                         }
                       });
     out.indices.swap(merged);
+  }
+  // The first build's rooms are a guess (32 a query point, where walls give a handful), and lists shrink when
+  // coarse particles replace fine ones: capacity beyond what the next build's rooms need is released (the
+  // dam break's wall lists held 130 bytes a particle of it).
+  const std::size_t nextRooms = listStart[nChunks] + listStart[nChunks] / 16 + 64 * nChunks;
+  if (out.indices.capacity() > 2 * nextRooms) {
+    std::vector<std::uint32_t> fitted;
+    fitted.reserve(nextRooms + nextRooms / 16);
+    fitted.assign(out.indices.begin(), out.indices.end());
+    out.indices.swap(fitted);
   }
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nChunks, 1),
                     [&](const tbb::blocked_range<std::size_t>& cr) {

@@ -1,8 +1,8 @@
 #pragma once
-/// Neighbour search on a uniform grid with counting sort (after Green 2008 / Ihmsen et al. 2011 "compact"
-/// grids), correct when particles of different sizes are mixed: cells are as large as the smallest support
-/// radius and each particle looks as many cells far as its largest possible pair support needs. Parallel with
-/// TBB and deterministic: lists come out in the same order whatever the thread count.
+/// Neighbour search on a uniform grid (after Green 2008 / Ihmsen et al. 2011 "compact" grids), correct when
+/// particles of different sizes are mixed: cells are as large as the smallest support radius and each
+/// particle looks as many cells far as its largest possible pair support needs. Parallel with TBB and
+/// deterministic: lists come out in the same order whatever the thread count.
 
 #include <cstdint>
 #include <vector>
@@ -11,7 +11,28 @@
 
 namespace fp::sim {
 
-/// Geometry of a dense grid over the simulation domain, and a counting sort of points into it.
+/// Read access to the cell ranges that UniformGrid::sort writes into one array. Compact: only the rows of
+/// cells (along x) that hold a point carry per-cell entries, so a grid over a large domain costs one word
+/// per row, not per cell. Layout: [0] the number of points, [1] the number of rows (dims.y * dims.z), then
+/// one word per row (the position of its dims.x + 1 cell starts in the array, 0 for an empty row), then the
+/// starts of the non-empty rows. An array whose point count is 0 (or an empty array) holds no point.
+class CellRanges {
+ public:
+  explicit CellRanges(const std::vector<std::uint32_t>& data)
+      : m_data(data.empty() ? nullptr : data.data()) {}
+  /// number of points sorted
+  std::uint32_t count() const { return m_data ? m_data[0] : 0; }
+  /// position in the array of the dims.x + 1 starts of row `row` (= cy + cz * dims.y), 0 when it is empty
+  std::uint32_t rowOffset(std::uint32_t row) const { return m_data[2 + row]; }
+  /// the array itself (the starts of a row at rowOffset: the sorted points of cell cx of the row are
+  /// [starts[cx], starts[cx + 1]))
+  const std::uint32_t* data() const { return m_data; }
+
+ private:
+  const std::uint32_t* m_data;
+};
+
+/// Geometry of a dense grid over the simulation domain, and a sort of points into it.
 class UniformGrid {
  public:
   /// covers `domain` (plus one cell of margin) with cubic cells of edge `cellSize` [m]; throws InputError
@@ -33,20 +54,26 @@ class UniformGrid {
     return std::uint32_t((cz * m_dims.y() + cy) * m_dims.x() + cx);
   }
 
-  /// Counting sort of x[0..n) by cell. Fills `order` (sorted k <- original order[k]) and `cellStart` (size
-  /// cellCount()+1: the sorted points of cell c are [cellStart[c], cellStart[c+1])). Stable, hence
-  /// deterministic.
+  /// Sorts x[0..n) by cell (linear index, then original index: stable, hence deterministic), in parallel.
+  /// Fills `order` (sorted k <- original order[k]) and `cells`, the cell ranges of the sorted points in the
+  /// compact form CellRanges reads.
   void sort(const Vec3* x, std::size_t n, std::vector<std::uint32_t>& order,
-            std::vector<std::uint32_t>& cellStart);
+            std::vector<std::uint32_t>& cells);
+  /// the sorted points of cell (cx, cy, cz): [first, second) (tests, diagnostics)
+  std::pair<std::uint32_t, std::uint32_t> cellRange(const std::vector<std::uint32_t>& cells, int cx, int cy,
+                                                    int cz) const;
   /// bytes held by scratch buffers
-  std::size_t memoryBytes() const { return m_cellOf.capacity() * sizeof(std::uint32_t); }
+  std::size_t memoryBytes() const {
+    return m_keys.capacity() * sizeof(std::uint64_t) + m_rowFirst.capacity() * sizeof(std::uint32_t);
+  }
 
  private:
   Vec3 m_origin = Vec3::Zero();
   Real m_cellSize = 1;
   Real m_invCellSize = 1;
   Eigen::Vector3i m_dims{1, 1, 1};
-  std::vector<std::uint32_t> m_cellOf;
+  std::vector<std::uint64_t> m_keys;      // cell << 32 | original index, sorted
+  std::vector<std::uint32_t> m_rowFirst;  // first sorted point of every row of cells
 };
 
 /// Neighbour lists in compressed-row form: the neighbours of particle i are indices[offsets[i] ..
@@ -80,7 +107,7 @@ class NeighborSearch {
   /// source's indexOffset added), excluding the query point itself when `selfSource` is that source's
   /// position in `sources`
   /// (-1: none). `maxH` is the largest support radius among the sources with per-point radii (a source with
-  /// a uniform radius is searched only as far as that radius needs).
+  /// a uniform radius is searched only as far as that radius needs). Every list is in ascending index order.
   void build(const UniformGrid& grid, const std::vector<Vec3>& qx, const std::vector<Real>& qH,
              const std::vector<GridPoints>& sources, int selfSource, Real maxH, NeighborList& out);
 
@@ -89,11 +116,16 @@ class NeighborSearch {
     std::size_t bytes = 0;
     for (const std::vector<Real>& c : m_cellMaxH)
       bytes += c.capacity() * sizeof(Real);
+    for (const std::vector<Real>& c : m_windowMaxH)
+      bytes += c.capacity() * sizeof(Real);
     return bytes;
   }
 
  private:
-  std::vector<std::vector<Real>> m_cellMaxH;  // per source with per-point supports: largest support per cell
+  // per source with per-point supports, indexed like its cell starts: the largest support of each cell
+  std::vector<std::vector<Real>> m_cellMaxH;
+  // the same, largest over a window of cells along x
+  std::vector<std::vector<Real>> m_windowMaxH;
 };
 
 }  // namespace fp::sim

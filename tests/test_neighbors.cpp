@@ -152,16 +152,48 @@ TEST(NeighborSearchTest, CountingSortIsStableAndComplete) {
   for (std::uint32_t k = 0; k < sorted.size(); ++k) {
     ASSERT_EQ(sorted[k], k);
   }
-  EXPECT_EQ(cells.back(), 2000u);
-  for (std::size_t cell = 0; cell + 1 < cells.size(); ++cell) {
-    for (std::uint32_t k = cells[cell]; k < cells[cell + 1]; ++k) {
-      const Eigen::Vector3i cc = grid.cellCoord(c.x[order[k]]);
-      ASSERT_EQ(grid.linear(cc.x(), cc.y(), cc.z()), cell);
-      if (k > cells[cell]) {
-        ASSERT_LT(order[k - 1], order[k]);  // stable
+  EXPECT_EQ(CellRanges(cells).count(), 2000u);
+  // every point is in its own cell's range, in ascending original order within a cell, and the ranges of
+  // all cells (linear order) tile [0, n)
+  std::uint32_t next = 0;
+  const Eigen::Vector3i dims = grid.dims();
+  for (int cz = 0; cz < dims.z(); ++cz) {
+    for (int cy = 0; cy < dims.y(); ++cy) {
+      for (int cx = 0; cx < dims.x(); ++cx) {
+        const auto [b, e] = grid.cellRange(cells, cx, cy, cz);
+        if (b == e)
+          continue;
+        ASSERT_EQ(b, next);
+        next = e;
+        for (std::uint32_t k = b; k < e; ++k) {
+          const Eigen::Vector3i cc = grid.cellCoord(c.x[order[k]]);
+          ASSERT_EQ(cc, Eigen::Vector3i(cx, cy, cz));
+          if (k > b) {
+            ASSERT_LT(order[k - 1], order[k]);  // stable
+          }
+        }
       }
     }
   }
+  EXPECT_EQ(next, 2000u);
+}
+
+TEST(NeighborSearchTest, CompactCellsCostARowNotACellPerEmptyRow) {
+  // a grid of 100 x 100 x 100 cells with points in one row: one word per row and the row's starts
+  const Aabb box(Vec3d(0, 0, 0), Vec3d(1, 1, 1));
+  UniformGrid grid;
+  grid.setup(box, 0.01f);
+  std::vector<Vec3> x;
+  for (int k = 0; k < 50; ++k)
+    x.emplace_back(Real(0.02 * k + 0.005), Real(0.5), Real(0.5));
+  std::vector<std::uint32_t> order, cells;
+  grid.sort(x.data(), x.size(), order, cells);
+  const std::size_t rows = std::size_t(grid.dims().y()) * std::size_t(grid.dims().z());
+  EXPECT_EQ(cells.size(), 2 + rows + std::size_t(grid.dims().x()) + 1);
+  const Eigen::Vector3i c = grid.cellCoord(x[7]);
+  const auto [b, e] = grid.cellRange(cells, c.x(), c.y(), c.z());
+  ASSERT_EQ(e - b, 1u);
+  EXPECT_EQ(order[b], 7u);
 }
 
 TEST(NeighborSearchTest, RejectsAGridThatIsTooLarge) {
