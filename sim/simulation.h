@@ -130,6 +130,8 @@ class Simulation {
   Real latticeMass() const { return m_latticeMass; }
   /// the coarsest mass m_base = mass_ratio * m_fine [kg]
   Real baseMass() const { return Real(m_params.massRatio) * m_latticeMass; }
+  /// the adaptivity, read-only (its record of the last adaptation step)
+  const Adaptivity& adaptivity() const { return m_adaptivity; }
   /// resolution mode
   AdaptivityMode mode() const { return m_mode; }
   /// true when the resolution changes during the run (surface and fluidplaying modes)
