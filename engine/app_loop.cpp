@@ -4,8 +4,19 @@ namespace fp::engine {
 
 int runAppLoop(AppSession& session, AppPlatform& platform, std::optional<int> frames) {
   int frame = 0;
+  double deferred = 0.0;  // time of the frames drawn while the steps ran [s], given to the next steps
   while ((!frames || frame < *frames) && platform.running()) {
     const FrameClock clock = platform.beginFrame();
+    if (!clock.waitForSteps && !clock.restart && !session.fixedStep && session.stepsRunning()) {
+      // the frame's deadline comes first: the last captured state again, the input queued for the next steps
+      platform.inputWhileStepping(session, clock);
+      if (clock.simulate)
+        deferred += clock.dt;
+      if (clock.render)
+        platform.draw(session, frame);
+      ++frame;
+      continue;
+    }
     session.finishSteps();
     if (clock.restart) {
       platform.restart(session);
@@ -15,8 +26,10 @@ int runAppLoop(AppSession& session, AppPlatform& platform, std::optional<int> fr
     session.applyRequests();
     if (clock.render)
       platform.capture(session, frame);
-    if (clock.simulate)
-      session.startSteps(clock.dt, platform.stepBudget());
+    if (clock.simulate) {
+      session.startSteps(clock.dt + deferred, platform.stepBudget());
+      deferred = 0.0;
+    }
     if (clock.render)
       platform.draw(session, frame);
     ++frame;

@@ -7,7 +7,10 @@
 ///   requests and live parameters -> capture the idle state -> start this frame's steps on the TBB workers
 ///   -> draw and present
 ///
-/// so the simulation runs while the frame is drawn from the last completed state.
+/// so the simulation runs while the frame is drawn from the last completed state. A platform with a deadline
+/// (the headset) may ask not to wait for the steps: while they still run, the frame takes no state and
+/// starts no steps, it draws the last captured state again (inputWhileStepping, draw), and the next frame
+/// that finds them done joins them and starts the next ones over the time of the frames in between.
 
 #include <limits>
 #include <optional>
@@ -25,6 +28,10 @@ struct FrameClock {
   bool simulate = true;  ///< start solver steps this frame
   bool render = true;    ///< capture and draw this frame (false: a frame the display does not show)
   bool restart = false;  ///< the platform lost its session: the loop joins the steps and calls restart()
+  /// false: when the last steps still run, do not wait for them: the frame draws the last captured state
+  /// again (a display with a deadline: the headset). A fixed-step session always waits (its frames are
+  /// deterministic).
+  bool waitForSteps = true;
 };
 
 /// The edges of the loop.
@@ -38,6 +45,9 @@ class AppPlatform {
   virtual FrameClock beginFrame() = 0;
   /// events and controls of the frame: hand target, requests, parameter edits; the simulation is idle
   virtual void input(AppSession& session, const FrameClock& clock) = 0;
+  /// input of a frame drawn while the last steps still run (FrameClock::waitForSteps): the simulation is
+  /// not idle, so only what the session queues for the next steps (AppSession::setTrackedHandTarget)
+  virtual void inputWhileStepping(AppSession&, const FrameClock&) {}
   /// takes what the frame shows from the idle simulation (particle upload, spray, statistics, export)
   virtual void capture(AppSession& session, int frame) = 0;
   /// draws and presents the frame while the simulation steps

@@ -77,6 +77,8 @@ AppSession::AppSession(const SessionConfig& config) : m_config(config) {
 
 AppSession::~AppSession() {
   m_task.wait();
+  if (m_thread.joinable())
+    m_thread.join();
 }
 
 void AppSession::build() {
@@ -109,6 +111,7 @@ void AppSession::build() {
       scene.colliders.push_back(std::move(c));
     t.parts = input::partPosesFromJoints(placed);
     t.target = t.parts;
+    t.through.clear();
     t.motion.set(t.parts, t.parts, 0.0, 1.0);
     // a lost hand rises until its lowest part is 3 cm above the water, at 1 m/s
     t.presence = input::HandPresence(park, 1.0);
@@ -281,6 +284,7 @@ void AppSession::setTrackedHandTarget(
   if (!t.presence.placed())
     t.presence.park(t.parts);  // the first sight: eased to from the parked pose, never jumped to
   t.target = t.presence.update(parts, frameDt);
+  t.through.push_back(t.target);
 }
 
 void AppSession::setHandScale(double scale) {
@@ -346,6 +350,8 @@ double AppSession::meanRealTimeFactor() const {
 void AppSession::finishSteps() {
   const auto waitStart = Clock::now();
   m_task.wait();
+  if (m_thread.joinable())
+    m_thread.join();
   const auto now = Clock::now();
   const bool ran = m_running;
   const bool stepped = ran && m_taskSteps > 0;
@@ -501,8 +507,11 @@ void AppSession::startSteps(double wallDt, double budget) {
     m_segment = input::PoseTrack();
     m_segment.add(input::poseSampleOf(t0, m_handPose));
     m_targetTime = t0;
-    for (TrackedHand& h : m_tracked)
+    for (TrackedHand& h : m_tracked) {
       h.motion.set(h.parts, h.parts, t0, t0 + 1.0);
+      h.through.clear();
+    }
+    m_stepsDone.store(true, std::memory_order_release);
     m_running = true;
     return;
   }
@@ -533,11 +542,24 @@ void AppSession::startSteps(double wallDt, double budget) {
   }
   for (TrackedHand& h : m_tracked) {
     const double tEnd = std::isfinite(target) ? target : t0 + simulation.params().dtMax;
-    h.motion.set(h.parts, h.target, t0, tEnd);
+    // through every frame's target since the last steps (one: the frame's own, two keys as always)
+    if (h.through.size() > 1)
+      h.motion.set(h.parts, h.through, t0, tEnd);
+    else
+      h.motion.set(h.parts, h.target, t0, tEnd);
+    h.through.clear();
   }
   m_running = true;
+  m_stepsDone.store(false, std::memory_order_relaxed);
   const double stepBudget = oneStep || fixedStep ? std::numeric_limits<double>::infinity() : budget;
-  m_task.run([this, target, stepBudget, oneStep] { runSteps(target, stepBudget, oneStep); });
+  auto steps = [this, target, stepBudget, oneStep] {
+    runSteps(target, stepBudget, oneStep);
+    m_stepsDone.store(true, std::memory_order_release);
+  };
+  if (m_config.stepThread)
+    m_thread = std::thread(steps);
+  else
+    m_task.run(steps);
 }
 
 void AppSession::runSteps(double target, double budget, bool oneStep) {
@@ -558,6 +580,10 @@ void AppSession::runSteps(double target, double budget, bool oneStep) {
         h.motion.apply(simulation, h.first, estimate);
       simulation.step();
       ++m_taskSteps;
+      if (m_slowStepsDone < m_config.slowSteps) {
+        ++m_slowStepsDone;
+        std::this_thread::sleep_for(std::chrono::duration<double>(m_config.slowStepSeconds));
+      }
       if (oneStep || seconds(Clock::now() - start) > budget)
         break;
     }

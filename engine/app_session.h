@@ -10,6 +10,7 @@
 #include <tbb/task_group.h>
 
 #include <array>
+#include <atomic>
 #include <chrono>
 #include <cstdint>
 #include <deque>
@@ -17,6 +18,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -45,6 +47,13 @@ struct SessionConfig {
   /// an instability rolls back to the last good in-memory snapshot (window, headset) instead of pausing
   /// with error() set (headless: the run reports it and ends)
   bool recover = false;
+  /// the steps run on a thread of their own instead of a TBB task (the headset: they run while the main
+  /// thread draws even with --threads 1, where TBB has no worker, and a frame may leave them running)
+  bool stepThread = false;
+  /// a solver slower than the display for the frame-pacing tests (--debug-slow-steps N,MS): the first
+  /// `slowSteps` solver steps of the session each take `slowStepSeconds` [s] longer
+  int slowSteps = 0;
+  double slowStepSeconds = 0.0;
 };
 
 /// What the session did about the last instability (the panel shows it).
@@ -114,6 +123,8 @@ class AppSession {
   // ---- between frames (the simulation is idle) ----
   /// Waits for the running steps; records the frame's statistics. Safe to call when none run.
   void finishSteps();
+  /// true while steps started by startSteps have not finished (finishSteps would wait); any time
+  bool stepsRunning() const { return m_running && !m_stepsDone.load(std::memory_order_acquire); }
   /// Applies requests and edited parameters: live ones at once, the others by rebuilding the simulation.
   void applyRequests();
   /// Starts the steps of one frame on the TBB workers: up to the wall time `wallDt` [s] times the time scale
@@ -210,7 +221,9 @@ class AppSession {
   /// number of tracked hands
   std::size_t trackedHandCount() const { return m_tracked.size(); }
   /// Where tracked hand k's parts are at the end of the coming frame's steps; nothing: tracking lost (the
-  /// hand eases out of the water and back, input::HandPresence). Call between frames.
+  /// hand eases out of the water and back, input::HandPresence). Call between frames, or while the steps run
+  /// (AppPlatform::inputWhileStepping): the targets of the frames until the next startSteps are queued, and
+  /// its steps pass through each in turn.
   void setTrackedHandTarget(std::size_t k,
                             const std::optional<std::array<input::PartPose, input::HandModel::kParts>>& parts,
                             double frameDt);
@@ -264,12 +277,16 @@ class AppSession {
     std::size_t first = 0;
     std::array<input::PartPose, input::HandModel::kParts> parts{};   // now
     std::array<input::PartPose, input::HandModel::kParts> target{};  // at the end of the frame's steps
+    std::vector<input::PartMotion::Parts> through;  // the targets set since the last steps started
     input::PartMotion motion;
     input::HandPresence presence{0.0, 1.0};
   };
   std::vector<TrackedHand> m_tracked;
 
   tbb::task_group m_task;
+  std::thread m_thread;                 // the steps' thread (SessionConfig::stepThread)
+  std::atomic<bool> m_stepsDone{true};  // set by the steps when they finish
+  int m_slowStepsDone = 0;              // written by the steps (SessionConfig::slowSteps)
   bool m_running = false;
   double m_targetTime = 0.0;
   double m_endTime = std::numeric_limits<double>::infinity();

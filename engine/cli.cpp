@@ -173,6 +173,20 @@ struct Declaration {
     app.add_option("--record-hands", o.recordHands, "with --xr: record the tracked hands as a joint CSV")
         ->type_name("FILE")
         ->group(app_);
+    app.add_option_function<std::string>(
+           "--debug-slow-steps",
+           [&o](const std::string& text) {
+             const std::size_t comma = text.find(',');
+             if (comma == std::string::npos)
+               throw std::invalid_argument("--debug-slow-steps expects N,MS, got '" + text + "'");
+             o.slowSteps = int(parseInteger("--debug-slow-steps", text.substr(0, comma), 0, 1000000));
+             o.slowStepMs = parseNumber("--debug-slow-steps", text.substr(comma + 1));
+             if (o.slowStepMs < 0.0 || o.slowStepMs > 10000.0)
+               throw std::invalid_argument("--debug-slow-steps: MS in [0, 10000], got '" + text + "'");
+           },
+           "a solver slower than the display (tests): the first N solver steps each take MS ms longer")
+        ->type_name("N,MS")
+        ->group(app_);
 
     app.add_option("--stats", o.statsPath, "write the run's statistics as JSON")
         ->type_name("FILE.json")

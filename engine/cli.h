@@ -70,6 +70,8 @@ struct CliOptions {
   bool xrRequired = false;  ///< --xr-required: like --xr, exit with kExitNoHeadset when it cannot be used
   bool noWindow = false;    ///< --no-window: no mirror window in the headset mode
   std::string recordHands;  ///< --record-hands FILE: the tracked hands as a joint CSV
+  int slowSteps = 0;        ///< --debug-slow-steps N,MS: the first N solver steps ...
+  double slowStepMs = 0.0;  ///< ... each take MS ms longer (a solver slower than the display, for tests)
 };
 
 /// A finite number, the whole of `text`; throws std::invalid_argument naming `flag` otherwise.

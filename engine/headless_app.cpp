@@ -115,6 +115,8 @@ SessionConfig sessionConfigOf(const CliOptions& options) {
   c.saveState = options.saveState;
   c.saveStateEvery = options.saveStateEvery;
   c.recover = !options.headless;  // the window and the headset roll back; a headless run reports and ends
+  c.slowSteps = options.slowSteps;
+  c.slowStepSeconds = 1e-3 * options.slowStepMs;
   return c;
 }
 

@@ -47,4 +47,9 @@ int ImGuiLayer::render() {
   return data ? data->TotalVtxCount : 0;
 }
 
+void ImGuiLayer::renderAgain() {
+  if (ImDrawData* data = ImGui::GetDrawData())
+    ImGui_ImplOpenGL3_RenderDrawData(data);
+}
+
 }  // namespace fp::engine

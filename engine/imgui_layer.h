@@ -19,6 +19,8 @@ class ImGuiLayer {
   void newFrame();
   /// draws the frame's ImGui windows into the bound framebuffer; returns the vertices drawn
   int render();
+  /// draws the windows of the last render() again (nothing before the first)
+  void renderAgain();
 };
 
 }  // namespace fp::engine

@@ -121,6 +121,8 @@ class XrPlatform : public AppPlatform {
     clock.dt = m_timing.period;
     clock.simulate = true;
     clock.render = true;  // draw() ends every begun frame, with no layer when the session is not visible
+    // the display's deadline first: while the last steps still run the frame shows the last state again
+    clock.waitForSteps = false;
     return clock;
   }
 
@@ -141,22 +143,12 @@ class XrPlatform : public AppPlatform {
       m_placement.place(head, turn, m_xr.stageSpace());
       m_placed = true;
     }
-    const XrHands hands = m_xr.locateHands();
-    if (hands.recentre || m_recentre) {
-      const auto [head, turn] = m_xr.headPose();
-      m_placement.place(head, turn, m_xr.stageSpace());
-      m_recentre = false;
-    }
-    TrackedJoints joints;
-    for (std::size_t k = 0; k < joints.size(); ++k) {
-      if (hands.joints[k])
-        joints[k] = m_placement.toScene(*hands.joints[k]);
-    }
+    const TrackedJoints joints = trackHands();
     if (!m_sized) {
       // the hands' colliders take the tracked hands' sizes from the first frame one is seen in, while the
       // water has barely started (the session starts over)
       const bool tracked = joints[0] || joints[1];
-      if (tracked && !hands.fromControllers)
+      if (tracked && !m_fromControllers)
         attachTrackedHands(session, joints, m_options.handScale);
       m_sized = tracked || session.simulation().time() > kSizingWindow;
     }
@@ -174,9 +166,24 @@ class XrPlatform : public AppPlatform {
     }
   }
 
+  /// a frame drawn while the last steps still run: the hands' targets are queued for the next steps (they
+  /// pass through every frame's); the mirror's window stays responsive, its panel waits for the steps
+  void inputWhileStepping(AppSession& session, const FrameClock&) override {
+    if (m_mirror)
+      m_mirror->pollEvents();
+    if (!m_frameActive || !m_placed)
+      return;
+    const TrackedJoints joints = trackHands();
+    if (m_sized)
+      setTrackedTargets(session, joints, m_timing.period);
+  }
+
   void capture(AppSession& session, int) override {
-    if (m_frameActive && m_timing.shouldRender)
+    // also when the session is not visible: a frame drawn while the steps run shows the last state taken
+    if (m_frameActive) {
       m_renderer.update(render::frameDataOf(session.simulation()));
+      ++m_captured;
+    }
   }
 
   void draw(AppSession& session, int frame) override {
@@ -216,6 +223,8 @@ class XrPlatform : public AppPlatform {
   /// asks the session to end, as Ctrl+C does (the end of --frames)
   void requestExit() { m_exitAsked = true; }
   int submitted() const { return m_submitted; }
+  /// frames that took a new state to draw (the others drew the last one again while the steps ran)
+  int captured() const { return m_captured; }
   int recreated() const { return m_recreated; }
 
   TankPlacement m_placement;
@@ -242,6 +251,23 @@ class XrPlatform : public AppPlatform {
     return false;
   }
 
+  /// the frame's hands in the scene's frame; the menu button or the panel's Recentre moves the tank first
+  TrackedJoints trackHands() {
+    const XrHands hands = m_xr.locateHands();
+    if (hands.recentre || m_recentre) {
+      const auto [head, turn] = m_xr.headPose();
+      m_placement.place(head, turn, m_xr.stageSpace());
+      m_recentre = false;
+    }
+    m_fromControllers = hands.fromControllers;
+    TrackedJoints joints;
+    for (std::size_t k = 0; k < joints.size(); ++k) {
+      if (hands.joints[k])
+        joints[k] = m_placement.toScene(*hands.joints[k]);
+    }
+    return joints;
+  }
+
   const CliOptions& m_options;
   XrProgram& m_xr;
   GlWindow& m_gl;
@@ -249,6 +275,8 @@ class XrPlatform : public AppPlatform {
   render::FluidRenderer m_renderer;
   XrProgram::FrameTiming m_timing;
   bool m_frameActive = false;
+  bool m_fromControllers = false;
+  int m_captured = 0;
   bool m_exit = false;
   bool m_exitAsked = false;
   bool m_exitRequested = false;
@@ -276,6 +304,7 @@ int runXrApp(const CliOptions& options, std::ostream& out) {
   xr.createSession(binding);
   SessionConfig config = sessionConfigOf(options);
   config.hand = false;       // the tracked hands take the mouse hand's place
+  config.stepThread = true;  // the steps run while the eyes are drawn, and a frame may leave them running
   AppSession probe(config);  // the scene, for the tank's floor centre and the hands' resting pose
   sim::Aabb water;
   for (const sim::FluidBlock& b : probe.scene().fluid)
@@ -314,8 +343,9 @@ int runXrApp(const CliOptions& options, std::ostream& out) {
     writeStatsJson(options.statsPath, summary);
   }
   if (!options.quiet) {
-    out << "frames " << frames << ", submitted " << platform.submitted() << ", sessions recreated "
-        << platform.recreated() << ", simulated " << session.simulation().time() << " s\n";
+    out << "frames " << frames << ", submitted " << platform.submitted() << ", states taken "
+        << platform.captured() << ", sessions recreated " << platform.recreated() << ", simulated "
+        << session.simulation().time() << " s\n";
   }
   return kExitOk;
 }

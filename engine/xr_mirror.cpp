@@ -83,6 +83,10 @@ void XrMirror::input(AppSession& session, render::RenderSettings& settings) {
   drawHelp(m->panel);
 }
 
+void XrMirror::pollEvents() {
+  m->window.pollEvents();
+}
+
 void XrMirror::copyEye(unsigned framebuffer, int width, int height) {
   m->allocate(width, height);
   glBindFramebuffer(GL_READ_FRAMEBUFFER, framebuffer);
@@ -114,6 +118,8 @@ void XrMirror::present(AppSession& session, int frame) {
   m->capture.sceneDrawn(m->panel, fbw, fbh, session.simulation().scene().frameRate);
   if (m->uiOpen)
     m_uiVertices = m->imgui.render();
+  else
+    m->imgui.renderAgain();  // a frame drawn while the steps ran: the panel as it was
   m->uiOpen = false;
   m->capture.frameDrawn(m->panel, frame, fbw, fbh);
   m->window.swapBuffers();

@@ -28,10 +28,13 @@ class XrMirror {
 
   /// the window's events, its keys and the panel of this frame (edits go to `session` and `settings`)
   void input(AppSession& session, render::RenderSettings& settings);
+  /// the window's events only (a frame drawn while the steps run: its keys and panel wait for the next input)
+  void pollEvents();
   /// copies the left eye's `width` x `height` [px] image from `framebuffer` (read before it is released)
   void copyEye(unsigned framebuffer, int width, int height);
-  /// draws the last eye image, letterboxed to the window, the panel over it, writes what frame capture asks
-  /// (the --screenshot at frame `frame`), and presents
+  /// draws the last eye image, letterboxed to the window, the panel over it (the last one drawn when input
+  /// was not called this frame), writes what frame capture asks (the --screenshot at frame `frame`), and
+  /// presents
   void present(AppSession& session, int frame);
   /// writes the --screenshot if it was not written yet
   void finish();

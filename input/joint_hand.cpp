@@ -234,20 +234,34 @@ double trackedHandScale(const HandJoints& joints) {
   return palmToTipLength(joints) / model;
 }
 
-void PartMotion::set(const std::array<PartPose, HandModel::kParts>& from,
-                     const std::array<PartPose, HandModel::kParts>& to, double t0, double t1) {
-  m_from = from;
-  m_to = to;
+void PartMotion::set(const Parts& from, const Parts& to, double t0, double t1) {
+  m_keys.assign({from, to});
   m_t0 = t0;
   m_t1 = t1 > t0 ? t1 : t0 + 1e-9;
 }
 
-std::array<PartPose, HandModel::kParts> PartMotion::sample(double t) const {
+void PartMotion::set(const Parts& from, const std::vector<Parts>& through, double t0, double t1) {
+  m_keys.assign(1, from);
+  m_keys.insert(m_keys.end(), through.begin(), through.end());
+  if (m_keys.size() < 2)
+    m_keys.push_back(from);
+  m_t0 = t0;
+  m_t1 = t1 > t0 ? t1 : t0 + 1e-9;
+}
+
+PartMotion::Parts PartMotion::sample(double t) const {
   const double u = std::clamp((t - m_t0) / (m_t1 - m_t0), 0.0, 1.0);
-  std::array<PartPose, HandModel::kParts> out;
+  // the segment, and the fraction along it (one segment: u itself, as a two-key motion always was)
+  const std::size_t segments = m_keys.size() - 1;
+  const double s = u * double(segments);
+  const std::size_t i = std::min(std::size_t(s), segments - 1);
+  const double f = s - double(i);
+  const Parts& from = m_keys[i];
+  const Parts& to = m_keys[i + 1];
+  Parts out;
   for (int k = 0; k < HandModel::kParts; ++k) {
-    out[k].position = (1.0 - u) * m_from[k].position + u * m_to[k].position;
-    out[k].orientation = m_from[k].orientation.slerp(u, m_to[k].orientation).normalized();
+    out[k].position = (1.0 - f) * from[k].position + f * to[k].position;
+    out[k].orientation = from[k].orientation.slerp(f, to[k].orientation).normalized();
   }
   return out;
 }

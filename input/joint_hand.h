@@ -84,21 +84,24 @@ double trackedHandScale(const HandJoints& joints);
 
 /// The motion of a hand's parts over one frame, from the pose at the frame's start to the pose at its end,
 /// interpolated across the solver steps the way HandDriver interpolates a pose track, so a fast hand never
-/// jumps through the water between steps.
+/// jumps through the water between steps. A batch of steps that serves several displayed frames (the
+/// headset while the solver lags) passes through each frame's pose in turn, evenly spaced in time.
 class PartMotion {
  public:
+  using Parts = std::array<PartPose, HandModel::kParts>;
   /// the parts move from `from` at simulated time t0 to `to` at t1 (> t0) [s]
-  void set(const std::array<PartPose, HandModel::kParts>& from,
-           const std::array<PartPose, HandModel::kParts>& to, double t0, double t1);
-  /// the parts at time t (clamped to [t0, t1]): positions linear, orientations slerp
-  std::array<PartPose, HandModel::kParts> sample(double t) const;
+  void set(const Parts& from, const Parts& to, double t0, double t1);
+  /// the parts move from `from` at simulated time t0 through `through` (at least one), the last at t1 (> t0)
+  /// and the others evenly spaced between [s]
+  void set(const Parts& from, const std::vector<Parts>& through, double t0, double t1);
+  /// the parts at time t (clamped to [t0, t1]): positions linear, orientations slerp, key to key
+  Parts sample(double t) const;
   /// sets the colliders first.. first+15 of `simulation` at its time with the velocities that reach the pose
   /// at time + h (h > 0 [s])
   void apply(sim::Simulation& simulation, std::size_t first, double h) const;
 
  private:
-  std::array<PartPose, HandModel::kParts> m_from{};
-  std::array<PartPose, HandModel::kParts> m_to{};
+  std::vector<Parts> m_keys = std::vector<Parts>(2);  // from, then the poses it passes through
   double m_t0 = 0.0;
   double m_t1 = 1.0;
 };

@@ -231,6 +231,7 @@ bool Adaptivity::transferMass(const AdaptContext& ctx, std::size_t donor, double
     p.v[j] = ((mj * p.v[j].cast<double>() + give * vDonor) / total).cast<Real>();
     p.m[j] = Real(total);
     m_locked[j] = 1;
+    note(j, kOpReceived);
   }
   // Summing the rooms can fall short of the donor's mass by round-off although the capacity covered it: the
   // last receiver then takes that remainder too, so no donor of ~1e-16 of its mass survives a merge.
@@ -246,8 +247,11 @@ bool Adaptivity::transferMass(const AdaptContext& ctx, std::size_t donor, double
   m_locked[donor] = 1;
   if (all && left <= 0.0) {
     m_removed[donor] = 1;
+    note(donor, kOpMerged);
     return true;
   }
+  if (given > 0.0)
+    note(donor, kOpShared);
   p.m[donor] = Real(mDonor - given);
   return !all && given > 0.0;
 }
@@ -259,6 +263,9 @@ AdaptivityStats Adaptivity::adapt(const AdaptContext& ctx, bool ignoreDelay) {
   AdaptivityStats stats;
   m_locked.assign(n, 0);
   m_removed.assign(n, 0);
+  m_ops.resize(n);
+  for (std::size_t i = 0; i < n; ++i)
+    m_ops[i] = ParticleOps{p.id[i], 0, 0};
 
   auto ratio = [&](std::size_t i) { return p.m[i] / p.mOpt[i]; };
   // the split delay counts solver steps, whatever the adaptation period
@@ -324,6 +331,7 @@ AdaptivityStats Adaptivity::adapt(const AdaptContext& ctx, bool ignoreDelay) {
     }
     m_removed[o] = 1;
     m_locked[o] = 1;
+    note(o, kOpSplit);
     ++stats.splits;
     stats.children += std::uint64_t(plan.n);
     if (plan.errorUnrotated >= 0.0) {
@@ -492,8 +500,9 @@ void Adaptivity::ageSplitChildren(ParticleSet& p, const SimParams& params) {
 }
 
 std::size_t Adaptivity::memoryBytes() const {
-  return m_locked.capacity() + m_removed.capacity() + m_plans.capacity() * sizeof(SplitPlan) +
-         m_keep.capacity() * sizeof(std::uint32_t) + m_candidates.capacity() * sizeof(m_candidates[0]);
+  return m_locked.capacity() + m_removed.capacity() + m_ops.capacity() * sizeof(ParticleOps) +
+         m_plans.capacity() * sizeof(SplitPlan) + m_keep.capacity() * sizeof(std::uint32_t) +
+         m_candidates.capacity() * sizeof(m_candidates[0]);
 }
 
 }  // namespace fp::sim

@@ -34,6 +34,22 @@ struct AdaptivityStats {
   AdaptivityStats& operator+=(const AdaptivityStats& o);
 };
 
+/// What one particle did in the last Adaptivity::adapt() call, for tests and diagnostics: a bit per kind of
+/// operation (OpKind) and the number of operations it took part in (at most one by design).
+struct ParticleOps {
+  std::uint32_t id = 0;    ///< the particle's id (indices change when the step removes particles)
+  std::uint8_t kinds = 0;  ///< OpKind bits
+  std::uint8_t count = 0;  ///< operations it took part in
+};
+
+/// Kinds of adaptivity operations in ParticleOps::kinds.
+enum OpKind : std::uint8_t {
+  kOpMerged = 1,    ///< gave all its mass away and was removed
+  kOpSplit = 2,     ///< split into children and was removed
+  kOpShared = 4,    ///< gave part of its mass to neighbours
+  kOpReceived = 8,  ///< received mass from a merge or a share
+};
+
 /// What one adaptation step may touch.
 struct AdaptContext {
   ParticleSet& fluid;                           ///< fluid particles, changed in place
@@ -64,6 +80,9 @@ class Adaptivity {
   /// context, of the densities the solver then sees: with temporal blending on (`split_blend_steps` > 0) a
   /// child's density error enters at (1 - splitBlendWeight(0)) of its own [-]
   static double splitError(const AdaptContext& ctx, std::size_t o, const std::vector<Vec3>& children);
+
+  /// per particle, indexed as the particles were at the start of the last adapt() call: what it did there
+  const std::vector<ParticleOps>& lastOperations() const { return m_ops; }
 
   /// Temporal blending (docs/method.md, Adaptivity, after Winchenbach et al. 2017): weight beta of the
   /// parent's value in a split child `age` solver steps after the split, 0.5 (1 - age / steps) while
@@ -98,9 +117,14 @@ class Adaptivity {
   /// moves up to `amount` of the donor's mass and momentum to its light neighbours; with `all` the donor is
   /// removed once all its mass is given. True for a completed merge (all) or any share (!all).
   bool transferMass(const AdaptContext& ctx, std::size_t donor, double amount, bool all);
+  void note(std::size_t i, OpKind kind) {
+    m_ops[i].kinds = std::uint8_t(m_ops[i].kinds | kind);
+    ++m_ops[i].count;
+  }
 
   std::vector<std::uint8_t> m_locked;
   std::vector<std::uint8_t> m_removed;
+  std::vector<ParticleOps> m_ops;
   std::vector<SplitPlan> m_plans;
   std::vector<std::uint32_t> m_keep;
   std::vector<std::pair<Real, std::uint32_t>> m_candidates;

@@ -29,6 +29,10 @@ ParamTable::ParamTable() : ParamTableOf<SimParams>("parameter", &ParamTable::val
   add("initial_relaxation", "time", "steps", 0, 1000, onReset,
       "damped steps settling the coarsened start of the modes with coarse particles", &P::initialRelaxation,
       20);
+  add("time_levels", "time stepping", "-", 1, 2, live,
+      "1: one time step for all; 2: particles whose own CFL allows twice the step (and their neighbours') "
+      "skip the solves every other step and drift (docs/method.md, Time levels)",
+      &P::timeLevels, 1);
   // pressure solver (DFSPH)
   add("density_tolerance", "solver", "%", 1e-4, 10.0, live, "allowed mean density error in percent of rho0",
       &P::densityTolerance, 0.1);
@@ -93,8 +97,9 @@ ParamTable::ParamTable() : ParamTableOf<SimParams>("parameter", &ParamTable::val
   add("support_blend_steps", "adaptivity", "steps", 0, 100, live,
       "steps over which a changed support radius is blended in (0: at once)", &P::supportBlendSteps, 10);
   add("split_blend_steps", "adaptivity", "steps", 0, 100, live,
-      "steps over which a split child's density and velocity are blended from its parent's (0: off)",
-      &P::splitBlendSteps, 10);
+      "steps over which a split child's density and velocity are blended from its parent's (0: off; off by "
+      "default: docs/method.md)",
+      &P::splitBlendSteps, 0);
   // splash enhancement (docs/method.md, Splash)
   add("splash_enabled", "splash", "-", 0, 1, live, "generate splash particles (render only)",
       &P::splashEnabled, true);

@@ -33,6 +33,7 @@ struct SimParams {
   double dtMax;
   double dtMin;
   int initialRelaxation;
+  int timeLevels;
   // pressure solver (DFSPH)
   double densityTolerance;
   double divergenceTolerance;

@@ -41,6 +41,29 @@ double latticeKernelSum(double H, double d) {
 /// resolution the adaptation settles at instead of with a thick band of fine particles to merge.
 constexpr double kInitialHeaviness = 1.9;
 
+/// ParticleSet::flags bit of a particle on time level 1: its own CFL allows twice the step, and it holds its
+/// acceleration through every other step (docs/method.md, Time levels).
+constexpr std::uint32_t kFlagTimeLevel1 = 1u << 16;
+
+/// Drops the neighbours of the particles marked in `held` from `list`, in place: they take no part in this
+/// step's solves.
+void dropNeighbors(NeighborList& list, const std::vector<std::uint8_t>& held) {
+  const std::size_t n = list.offsets.size() - 1;
+  std::uint32_t write = 0;
+  std::uint32_t begin = list.offsets[0];
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::uint32_t end = list.offsets[i + 1];
+    list.offsets[i] = write;
+    if (!held[i]) {
+      for (std::uint32_t k = begin; k < end; ++k)
+        list.indices[write++] = list.indices[k];
+    }
+    begin = end;
+  }
+  list.offsets[n] = write;
+  list.indices.resize(write);
+}
+
 std::string formatVec(const Vec3& v) {
   std::ostringstream s;
   s << "(" << v.x() << ", " << v.y() << ", " << v.z() << ")";
@@ -72,6 +95,7 @@ void RunStats::add(const StepStats& s, std::size_t particles) {
   densityIterations += std::uint64_t(s.densityIterations);
   divergenceIterations += std::uint64_t(s.divergenceIterations);
   neighborsSum += s.fluidNeighbors + s.boundaryNeighbors;
+  heldParticleSteps += s.heldParticles;
   times += s.times;
   adaptivity += s.adaptivity;
 }
@@ -136,6 +160,9 @@ void Simulation::relax(int steps) {
   }
   std::fill(m_fluid.splitTime.begin(), m_fluid.splitTime.end(), Real(-1));
   std::fill(m_fluid.parentId.begin(), m_fluid.parentId.end(), kNoParent);
+  for (std::uint32_t& f : m_fluid.flags)
+    f &= ~kFlagTimeLevel1;
+  m_heldLastStep = false;
   for (std::uint32_t& f : m_fluid.flags)
     f &= ~std::uint32_t(kFlagSplit);
   m_time = 0.0;
@@ -418,6 +445,113 @@ void Simulation::integrateAndCheck(Real dt) {
   throw InstabilityError(s.str());
 }
 
+std::size_t Simulation::holdCoarse() {
+  // A step between two synchronised ones: the particles on time level 1 take no part in the solves (their
+  // neighbour lists are emptied, so each solver pass costs them nothing); they keep their density and warm
+  // starts and drift with their velocity. Their neighbours still see them, as particles of known velocity
+  // whose stiffness is zero, and push them with the reaction of their own pressure (reactOnHeld).
+  const std::size_t n = m_fluid.size();
+  m_held.clear();
+  std::vector<std::uint8_t> mark(n, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (m_fluid.flags[i] & kFlagTimeLevel1) {
+      m_held.push_back(std::uint32_t(i));
+      mark[i] = 1;
+    }
+  }
+  if (m_held.empty())
+    return 0;
+  // the held particles' fluid neighbours, for the reaction of their active neighbours' pressure
+  m_heldNbrs.offsets.assign(1, 0);
+  m_heldNbrs.indices.clear();
+  for (std::uint32_t i : m_held) {
+    for (std::uint32_t k = m_fluidNbrs.offsets[i]; k < m_fluidNbrs.offsets[i + 1]; ++k) {
+      if (!mark[m_fluidNbrs.indices[k]])
+        m_heldNbrs.indices.push_back(m_fluidNbrs.indices[k]);
+    }
+    m_heldNbrs.offsets.push_back(std::uint32_t(m_heldNbrs.indices.size()));
+  }
+  dropNeighbors(m_fluidNbrs, mark);
+  dropNeighbors(m_boundaryNbrs, mark);
+  const std::size_t h = m_held.size();
+  m_heldRho.resize(h);
+  m_heldKappa.resize(h);
+  m_heldKappaV.resize(h);
+  for (std::size_t k = 0; k < h; ++k) {
+    const std::uint32_t i = m_held[k];
+    m_heldRho[k] = m_fluid.rho[i];
+    m_heldKappa[k] = m_fluid.kappa[i];
+    m_heldKappaV[k] = m_fluid.kappaV[i];
+    // no warm start: a held particle's stiffness stays zero in this step's solves
+    m_fluid.kappa[i] = 0;
+    m_fluid.kappaV[i] = 0;
+  }
+  return h;
+}
+
+void Simulation::reactOnHeld(Real dt) {
+  // The solves moved each active particle i by -V_j (dt kappa_i + kappaV_i) grad W_ij against a held
+  // neighbour j whose stiffness was zero; j takes the opposite momentum, V_i (dt kappa_i + kappaV_i) grad
+  // W_ij (m_i V_j = m_j V_i), so the interface conserves momentum like any pair of the solve. (kappa is the
+  // stiffness the density solve applied in this step, kappaV the divergence solve's times its step.)
+  const ParticleSet& p = m_fluid;
+  const Real invRho0 = Real(1) / Real(m_params.restDensity);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m_held.size(), 256),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t k = r.begin(); k < r.end(); ++k) {
+                        const std::uint32_t j = m_held[k];
+                        Vec3 dv = Vec3::Zero();
+                        for (std::uint32_t q = m_heldNbrs.offsets[k]; q < m_heldNbrs.offsets[k + 1]; ++q) {
+                          const std::uint32_t i = m_heldNbrs.indices[q];
+                          const Vec3 xij = p.x[i] - p.x[j];
+                          const Real g = CubicSpline::gradFactor(xij.norm(), pairSupport(p.H[i], p.H[j]));
+                          dv += (p.m[i] * invRho0 * (dt * p.kappa[i] + p.kappaV[i]) * g) * xij;
+                        }
+                        m_fluid.v[j] += dv;
+                      }
+                    });
+}
+
+void Simulation::restoreHeld(std::vector<Real>& field, const std::vector<Real>& saved) const {
+  for (std::size_t k = 0; k < m_held.size(); ++k)
+    field[m_held[k]] = saved[k];
+}
+
+std::size_t Simulation::assignTimeLevels(Real dt) {
+  // After a synchronised step, on its neighbour lists. A candidate is a particle whose own CFL step,
+  // cfl_factor (H_i / 2) / (|v_i| + dt |a_i|) with its whole acceleration of the step, is at least twice the
+  // step, with no moving collider near (its own CFL counts for its neighbours) and not a split child that
+  // still blends. Level 1 takes the candidates whose neighbours are all candidates: one layer of particles
+  // that could hold but take part lies between the held ones and the particles that need the short step
+  // (the buffer of regional time stepping, Goswami & Batty 2014).
+  const std::size_t n = m_fluid.size();
+  const std::size_t nStatic = m_boundary.staticCount();
+  const Real cfl = Real(m_params.cflFactor);
+  std::vector<std::uint8_t> candidate(n, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    bool ok = m_fluid.parentId[i] == kNoParent;
+    const Real speed = m_fluid.v[i].norm() + dt * m_fluid.a[i].norm();
+    if (ok && speed > Real(0))
+      ok = cfl * Real(0.5) * m_fluid.H[i] / speed >= Real(2) * dt;
+    for (std::uint32_t k = m_boundaryNbrs.offsets[i]; ok && k < m_boundaryNbrs.offsets[i + 1]; ++k)
+      ok = m_boundaryNbrs.indices[k] < nStatic;
+    candidate[i] = ok ? 1 : 0;
+  }
+  std::size_t count = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    bool level1 = candidate[i] != 0;
+    for (std::uint32_t k = m_fluidNbrs.offsets[i]; level1 && k < m_fluidNbrs.offsets[i + 1]; ++k)
+      level1 = candidate[m_fluidNbrs.indices[k]] != 0;
+    if (level1) {
+      m_fluid.flags[i] |= kFlagTimeLevel1;
+      ++count;
+    } else {
+      m_fluid.flags[i] &= ~kFlagTimeLevel1;
+    }
+  }
+  return count;
+}
+
 void Simulation::step() {
   StepStats st;
   auto t0 = Clock::now();
@@ -434,6 +568,21 @@ void Simulation::step() {
     st.boundaryNeighbors = double(m_boundaryNbrs.indices.size()) / double(n);
   }
 
+  // time levels: every other step is a synchronised one, where every particle takes part
+  const bool multiRate = m_params.timeLevels > 1;
+  const bool syncStep = !multiRate || m_stepCount % 2 == 0;
+  st.heldParticles = syncStep ? 0 : holdCoarse();
+  if (multiRate && syncStep && m_heldLastStep) {
+    // the particles held in the last step drifted through it: they get its gravity impulse now, so every
+    // particle receives gravity for every step
+    const Vec3 g(Real(m_params.gravity[0]), Real(m_params.gravity[1]), Real(m_params.gravity[2]));
+    for (std::size_t i = 0; i < n; ++i) {
+      if (m_fluid.flags[i] & kFlagTimeLevel1)
+        m_fluid.v[i] += m_dt * g;
+    }
+  }
+  m_heldLastStep = st.heldParticles > 0;
+
   SolverContext ctx{m_fluid, m_boundary, m_fluidNbrs, m_boundaryNbrs, m_params};
   m_solver.resetBoundaryImpulse();
   double blendTime = 0.0;
@@ -446,6 +595,7 @@ void Simulation::step() {
     t2 = tb;
   }
   st.densityError = m_solver.computeDensityAndFactor(ctx);
+  restoreHeld(m_fluid.rho, m_heldRho);
   auto t3 = Clock::now();
   st.times.density = seconds(t2, t3);
   if (adaptive()) {
@@ -455,8 +605,9 @@ void Simulation::step() {
     blendTime += seconds(t3, tb);
     t3 = tb;
   }
+  // (levels and adaptation need every particle's neighbours: only on synchronised steps)
   const bool adaptNow =
-      adaptive() && m_stepCount % std::uint64_t(std::max(1, m_params.adaptationPeriod)) == 0;
+      adaptive() && syncStep && m_stepCount % std::uint64_t(std::max(1, m_params.adaptationPeriod)) == 0;
   // the levels of every levels_period-th adaptation step; the optimal masses are kept in between
   const bool levelsNow = adaptNow && m_stepCount % (std::uint64_t(std::max(1, m_params.adaptationPeriod)) *
                                                     std::uint64_t(std::max(1, m_params.levelsPeriod))) ==
@@ -470,10 +621,13 @@ void Simulation::step() {
 
   if (m_params.divergenceSolve)
     st.divergenceIterations = m_solver.divergenceSolve(ctx, m_dt).iterations;
+  restoreHeld(m_fluid.kappaV, m_heldKappaV);
   auto t4 = Clock::now();
   st.times.divergence = seconds(t3, t4);
 
   m_solver.nonPressureForces(ctx, m_dt);
+  for (std::uint32_t i : m_held)
+    m_fluid.a[i].setZero();  // a held particle drifts (its gravity comes with the next step)
   auto t5 = Clock::now();
   st.times.viscosity = seconds(t4, t5);
 
@@ -485,6 +639,11 @@ void Simulation::step() {
   const SolveResult density = m_solver.densitySolve(ctx, dt);
   st.densityIterations = density.iterations;
   st.solverDensityError = density.error;
+  if (!m_held.empty())
+    reactOnHeld(dt);
+  restoreHeld(m_fluid.kappa, m_heldKappa);
+  if (multiRate && syncStep)
+    m_level1 = assignTimeLevels(dt);
   auto t7 = Clock::now();
   st.times.pressure = seconds(t6, t7);
 
@@ -510,10 +669,20 @@ void Simulation::step() {
     Adaptivity::blendSupports(m_fluid, m_params, m_latticeMass);
     st.times.adaptation = seconds(t8, Clock::now()) + blendTime;
   }
+  if (st.heldParticles > 0) {
+    // the held particles' lists were emptied: the lists no longer hold all neighbours
+    m_fluidNbrs.offsets.clear();
+    m_fluidNbrs.indices.clear();
+    m_boundaryNbrs.offsets.clear();
+    m_boundaryNbrs.indices.clear();
+  }
+  m_held.clear();
   ++m_stepCount;
   st.dt = dt;
   m_last = st;
   m_run.add(st, n);
+  if (multiRate)
+    m_run.level1ParticleSteps += m_level1;
 }
 
 double Simulation::pressure(std::size_t i) const {

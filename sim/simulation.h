@@ -47,6 +47,7 @@ struct StepStats {
   double boundaryNeighbors = 0;   ///< mean boundary neighbours per particle
   PhaseTimes times;               ///< wall time by phase
   AdaptivityStats adaptivity;     ///< splits, merges and redistributions of this step
+  std::size_t heldParticles = 0;  ///< particles that held their acceleration this step (time_levels = 2)
 };
 
 /// Figures accumulated over many steps.
@@ -62,6 +63,8 @@ struct RunStats {
   double neighborsSum = 0;                 ///< sum of mean (fluid + boundary) neighbours per step
   PhaseTimes times;                        ///< wall time by phase
   AdaptivityStats adaptivity;              ///< splits, merges and redistributions
+  std::uint64_t heldParticleSteps = 0;     ///< sum over steps of StepStats::heldParticles
+  std::uint64_t level1ParticleSteps = 0;   ///< sum over steps of the particles on time level 1
   /// add one step
   void add(const StepStats& s, std::size_t particles);
 };
@@ -127,6 +130,8 @@ class Simulation {
   Real latticeMass() const { return m_latticeMass; }
   /// the coarsest mass m_base = mass_ratio * m_fine [kg]
   Real baseMass() const { return Real(m_params.massRatio) * m_latticeMass; }
+  /// the adaptivity, read-only (its record of the last adaptation step)
+  const Adaptivity& adaptivity() const { return m_adaptivity; }
   /// resolution mode
   AdaptivityMode mode() const { return m_mode; }
   /// true when the resolution changes during the run (surface and fluidplaying modes)
@@ -145,6 +150,10 @@ class Simulation {
   void updateColliders();
   void searchNeighbors();
   void integrateAndCheck(Real dt);
+  std::size_t holdCoarse();
+  void reactOnHeld(Real dt);
+  void restoreHeld(std::vector<Real>& field, const std::vector<Real>& saved) const;
+  std::size_t assignTimeLevels(Real dt);
 
   SceneDesc m_scene;
   SimParams m_params;
@@ -164,6 +173,12 @@ class Simulation {
   LevelEstimator m_levels;
   Adaptivity m_adaptivity;
   std::vector<Real> m_target;
+  // time levels (time_levels = 2): particles held this step, and their saved fields
+  std::vector<std::uint32_t> m_held;
+  std::vector<Real> m_heldRho, m_heldKappa, m_heldKappaV;
+  std::size_t m_level1 = 0;
+  bool m_heldLastStep = false;
+  NeighborList m_heldNbrs;
   Real m_support = 0;
   Real m_latticeMass = 0;
   Real m_dt = 0;

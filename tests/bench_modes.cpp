@@ -78,7 +78,9 @@ struct Row {
   double densityError = 0;
   sim::AdaptivityStats adaptivity;
   double adaptivityShare = 0;
-  double levelsShare = 0;                                                 // levels alone, share of step time
+  double levelsShare = 0;  // levels alone, share of step time
+  double level1Share = 0;  // time_levels = 2: particle-steps on time level 1, share of all particle-steps
+  double heldShare = 0;    // particle-steps that held their acceleration (skipped the solves), share
   double surfaceFine = 0, band = 0, dynamic = 0, base = 0, tooLight = 0;  // mean particles per frame
   double densityErrorParticles = 0, densityErrorVolume = 0;  // frame means, per particle and volume-weighted
   std::vector<double> runHeightMean, runHeightMax;           // heightMean and heightMax of every run [m]
@@ -278,6 +280,10 @@ Row runMode(sim::SceneDesc scene, sim::AdaptivityMode mode, double simTime, doub
   const double total = run.times.total();
   row.adaptivityShare = total > 0 ? (run.times.levels + run.times.adaptation) / total : 0.0;
   row.levelsShare = total > 0 ? run.times.levels / total : 0.0;
+  if (run.particleSteps > 0) {
+    row.level1Share = double(run.level1ParticleSteps) / double(run.particleSteps);
+    row.heldShare = double(run.heldParticleSteps) / double(run.particleSteps);
+  }
   row.runHeightMean.push_back(row.heightMean);
   row.runHeightMax.push_back(row.heightMax);
   return row;
@@ -506,13 +512,14 @@ int main(int argc, char** argv) {
   }
   std::printf(
       "\nparticles by what they are refined for, mean per frame as a share of uniform-high's count:\n");
-  std::printf("%-13s %9s %9s %9s %9s %9s %8s %10s %10s\n", "mode", "surface", "band", "dynamic", "base",
-              "too light", "levels%", "err% part", "err% vol");
+  std::printf("%-13s %9s %9s %9s %9s %9s %8s %10s %10s %7s %7s\n", "mode", "surface", "band", "dynamic",
+              "base", "too light", "levels%", "err% part", "err% vol", "lvl1%", "held%");
   for (const Row& r : rows) {
     const double u = high && high->particlesMean > 0 ? 100.0 / high->particlesMean : 0.0;
-    std::printf("%-13s %8.2f%% %8.2f%% %8.2f%% %8.2f%% %8.2f%% %8.1f %10.3f %10.3f\n", r.mode.c_str(),
-                u * r.surfaceFine, u * r.band, u * r.dynamic, u * r.base, u * r.tooLight, 100 * r.levelsShare,
-                100 * r.densityErrorParticles, 100 * r.densityErrorVolume);
+    std::printf("%-13s %8.2f%% %8.2f%% %8.2f%% %8.2f%% %8.2f%% %8.1f %10.3f %10.3f %7.1f %7.1f\n",
+                r.mode.c_str(), u * r.surfaceFine, u * r.band, u * r.dynamic, u * r.base, u * r.tooLight,
+                100 * r.levelsShare, 100 * r.densityErrorParticles, 100 * r.densityErrorVolume,
+                100 * r.level1Share, 100 * r.heldShare);
   }
   if (runs > 1) {
     // an order between two modes is claimed only where the means differ by more than the spreads

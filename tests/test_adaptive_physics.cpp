@@ -43,11 +43,16 @@ TEST(AdaptivePhysicsTest, TankAtRestStaysStillFineAtTheSurfaceCoarseInside) {
   Simulation sim(scene);
   const double mass0 = sim.totalMass();
   double errorSum = 0.0;
+  double vrmsSum = 0.0;
   int steps = 0;
   while (sim.time() < 1.5) {
     sim.step();
     if (sim.time() > 1.0) {
       errorSum += sim.lastStep().densityError;
+      double e = 0.0;
+      for (std::size_t i = 0; i < sim.particles().size(); ++i)
+        e += double(sim.particles().m[i]) * double(sim.particles().v[i].squaredNorm());
+      vrmsSum += std::sqrt(e / mass0);
       ++steps;
     }
   }
@@ -56,14 +61,20 @@ TEST(AdaptivePhysicsTest, TankAtRestStaysStillFineAtTheSurfaceCoarseInside) {
   EXPECT_LT(errorSum / steps, 0.005);
   // still: the water surface stays level and the kinetic energy small
   double top = 0.0;
-  double e = 0.0;
-  for (std::size_t i = 0; i < p.size(); ++i) {
+  for (std::size_t i = 0; i < p.size(); ++i)
     top = std::max(top, double(p.x[i].y()));
-    e += 0.5 * double(p.m[i]) * double(p.v[i].squaredNorm());
-  }
   EXPECT_NEAR(top, 0.3, 0.03);
-  const double vrms = std::sqrt(2.0 * e / mass0);
-  EXPECT_LT(vrms, 0.3) << "rms speed " << vrms << " m/s";
+  // the rms speed averaged over the last 0.5 s: measured 0.113 m/s (the fastest particle at 1.5 s at 0.57
+  // m/s); bound 0.145 (1.28x; it was 0.3 at one instant)
+  const double vrms = vrmsSum / steps;
+  double vmax = 0.0;
+  for (const Vec3& v : p.v)
+    vmax = std::max(vmax, double(v.norm()));
+  std::printf(
+      "adaptive tank at rest from 1 s to 1.5 s: rms speed %.4f m/s (at 1.5 s: max %.4f m/s), %zu particles "
+      "of %zu\n",
+      vrms, vmax, p.size(), nHigh);
+  EXPECT_LT(vrms, 0.145) << "rms speed " << vrms << " m/s";
   // finest at the surface, coarse at the bottom, and far fewer particles than uniform-high
   // (the free-surface particles: with surface_distance_lo = 0 only they are fully fine)
   const double atSurface =
@@ -120,7 +131,10 @@ TEST(AdaptivePhysicsTest, DamBreakSmallLongRunBoundedAndConserving) {
     ASSERT_NO_THROW(sim.step());
     most = std::max(most, sim.particles().size());
   }
-  EXPECT_LE(most, nHigh + nHigh / 10);
+  std::printf("adaptive dam break: most particles %zu, uniform-high %zu (%.3f)\n", most, nHigh,
+              double(most) / double(nHigh));
+  // measured: at most 756 particles against 2380 in uniform-high (0.32); bound 0.4 (it was 1.1)
+  EXPECT_LE(double(most), 0.4 * double(nHigh));
   EXPECT_GT(sim.runStats().adaptivity.splits, 0u);
   EXPECT_GT(sim.runStats().adaptivity.merges, 0u);
   EXPECT_NEAR(sim.totalMass(), mass0, 1e-6 * mass0);

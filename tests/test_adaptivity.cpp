@@ -167,6 +167,83 @@ TEST(AdaptivityTest, SplitMergeShareConserveMassAndMomentumSmall) {
   }
 }
 
+namespace {
+
+/// Checks one adapt() call against its record (Adaptivity::lastOperations) and the particles before and
+/// after: every particle takes part in one operation at most, a receiver never splits, a receiver ends at or
+/// below its optimal mass, the removed ones (merged, split) are gone and the others kept their id. Returns
+/// the number of receivers.
+std::size_t checkOneOperationPerParticle(const ParticleSet& before, const ParticleSet& after,
+                                         const Adaptivity& adaptivity, const AdaptivityStats& st) {
+  const std::vector<ParticleOps>& ops = adaptivity.lastOperations();
+  EXPECT_EQ(ops.size(), before.size());
+  std::vector<std::int64_t> now;  // id -> index after the step, -1 when gone
+  for (std::size_t i = 0; i < after.size(); ++i) {
+    if (after.id[i] >= now.size())
+      now.resize(after.id[i] + 1, -1);
+    now[after.id[i]] = std::int64_t(i);
+  }
+  auto indexAfter = [&](std::uint32_t id) { return id < now.size() ? now[id] : std::int64_t(-1); };
+  std::size_t merged = 0, split = 0, received = 0;
+  for (std::size_t i = 0; i < ops.size() && i < before.size(); ++i) {
+    const ParticleOps& o = ops[i];
+    EXPECT_EQ(o.id, before.id[i]);
+    EXPECT_LE(o.count, 1) << "particle " << o.id << " took part in " << int(o.count)
+                          << " operations in one step (kinds " << int(o.kinds) << ")";
+    EXPECT_FALSE((o.kinds & kOpReceived) && (o.kinds & kOpSplit)) << "receiver " << o.id << " split";
+    const std::int64_t j = indexAfter(o.id);
+    merged += (o.kinds & kOpMerged) != 0;
+    split += (o.kinds & kOpSplit) != 0;
+    if (o.kinds & (kOpMerged | kOpSplit)) {
+      EXPECT_EQ(j, -1) << "removed particle " << o.id << " still there";
+      continue;
+    }
+    EXPECT_GE(j, 0) << "particle " << o.id << " lost without an operation";
+    if (j < 0)
+      continue;
+    const Real m = after.m[std::size_t(j)];
+    if (o.kinds & kOpReceived) {
+      ++received;
+      EXPECT_GT(m, before.m[i]);
+      // a receiver ends at or below its optimal mass (so it is no split candidate because of what it got)
+      EXPECT_LE(double(m), double(after.mOpt[std::size_t(j)]) * (1 + 1e-5)) << "receiver " << o.id;
+    } else if (o.kinds & kOpShared) {
+      EXPECT_LT(m, before.m[i]);
+    } else {
+      EXPECT_EQ(m, before.m[i]) << "particle " << o.id << " changed mass without an operation";
+    }
+  }
+  EXPECT_EQ(merged, st.merges);
+  EXPECT_EQ(split, st.splits);
+  return received;
+}
+
+}  // namespace
+
+TEST(AdaptivityTest, EachParticleTakesPartInOneOperationPerStepSmall) {
+  // Random neighbourhoods of mixed masses: many merges, splits and shares in one step. Then the same with a
+  // full transfer rate and split/share thresholds close to 1, where a receiver that kept receiving or was not
+  // capped at its optimal mass would become a split candidate in the same step.
+  for (int variant = 0; variant < 2; ++variant) {
+    for (unsigned seed = 1; seed <= 3; ++seed) {
+      Neighbourhood nb(seed);
+      if (variant == 1) {
+        nb.params.transferRate = 1.0;
+        nb.params.shareAbove = 1.05;
+        nb.params.splitAbove = 1.2;
+      }
+      const ParticleSet before = nb.p;
+      Adaptivity adaptivity;
+      const AdaptivityStats st = adaptivity.adapt(nb.context(0.5), true);
+      EXPECT_GT(st.merges, 10u);
+      EXPECT_GT(st.splits, 10u);
+      EXPECT_GT(st.redistributions, 10u);
+      const std::size_t received = checkOneOperationPerParticle(before, nb.p, adaptivity, st);
+      EXPECT_GT(received, 50u) << "variant " << variant << " seed " << seed;
+    }
+  }
+}
+
 TEST(AdaptivityTest, ChildrenNeverLandInAWallSmall) {
   Neighbourhood nb(11);
   // every particle far too heavy: all split, many of them next to the container's walls
@@ -188,31 +265,78 @@ TEST(AdaptivityTest, ChildrenNeverLandInAWallSmall) {
 }
 
 TEST(AdaptivityTest, OrientationChoiceLowersTheSplitDensityErrorSmall) {
+  // The reported errors (the plans') and the children really placed: each split's children, at the tail of
+  // the set in plan order, are scored again with the public split error on an untouched copy of the
+  // neighbourhood and compared with the unrotated template, which is always a candidate. Placing children in
+  // an orientation other than the chosen one (or choosing badly) makes a placed split worse than the
+  // unrotated one. (The old check, a reduction in [0, 1), held by construction.)
   double chosen = 0.0;
   double unrotated = 0.0;
   std::uint64_t compared = 0;
+  double placedSum = 0.0;
+  double unrotatedSum = 0.0;
+  int interior = 0;
+  int worse = 0;
   for (unsigned seed = 20; seed < 24; ++seed) {
     Neighbourhood nb(seed);
-    nb.params.splitBlendSteps = 0;  // the children's own densities (without the temporal blending's half)
+    Neighbourhood ref(seed);
+    // the children's own densities (without the temporal blending's half)
+    nb.params.splitBlendSteps = 0;
+    ref.params.splitBlendSteps = 0;
     // the parents' densities as the solver sees them: the children are to reproduce them
     DfsphSolver solver;
-    SolverContext ctx{nb.p, nb.boundary, nb.fluidNbrs, nb.boundaryNbrs, nb.params};
-    solver.computeDensityAndFactor(ctx);
-    for (std::size_t i = 0; i < nb.p.size(); ++i)
-      nb.p.mOpt[i] = nb.p.m[i] / Real(3);
+    for (Neighbourhood* h : {&nb, &ref}) {
+      SolverContext ctx{h->p, h->boundary, h->fluidNbrs, h->boundaryNbrs, h->params};
+      solver.computeDensityAndFactor(ctx);
+      for (std::size_t i = 0; i < h->p.size(); ++i)
+        h->p.mOpt[i] = h->p.m[i] / Real(3);
+    }
     Adaptivity adaptivity;
     const AdaptivityStats st = adaptivity.adapt(nb.context(0.0), true);
     chosen += st.splitErrorChosen;
     unrotated += st.splitErrorUnrotated;
     compared += st.splitsCompared;
+    ASSERT_EQ(st.merges, 0u);
+    ASSERT_EQ(st.children, 3 * st.splits);  // m / m_opt = 3: three children each
+    const std::size_t first = nb.p.size() - st.children;
+    const AdaptContext refCtx = ref.context(0.0);
+    const double r = ref.params.particleRadius;
+    for (std::size_t c = first; c < nb.p.size(); c += 3) {
+      const std::vector<Vec3> placed(nb.p.x.begin() + std::ptrdiff_t(c),
+                                     nb.p.x.begin() + std::ptrdiff_t(c + 3));
+      const Vec3 centre = (placed[0] + placed[1] + placed[2]) / Real(3);
+      std::size_t parent = 0;
+      for (std::size_t i = 1; i < ref.p.size(); ++i)
+        if ((ref.p.x[i] - centre).squaredNorm() < (ref.p.x[parent] - centre).squaredNorm())
+          parent = i;
+      ASSERT_LT((ref.p.x[parent] - centre).norm(), 1e-5f) << "children not centred on a parent";
+      // away from the walls every orientation is valid, the unrotated one included
+      if (ref.p.x[parent].cwiseAbs().maxCoeff() > 0.045f)
+        continue;
+      const double radius = r * std::cbrt(double(ref.p.m[parent]) / double(ref.mFine));
+      std::vector<Vec3> straight;
+      for (const Vec3d& offset : SplitTemplates::get().offsets(3))
+        straight.push_back((ref.p.x[parent].cast<double>() + radius * offset).cast<Real>());
+      const double ePlaced = Adaptivity::splitError(refCtx, parent, placed);
+      const double eStraight = Adaptivity::splitError(refCtx, parent, straight);
+      placedSum += ePlaced;
+      unrotatedSum += eStraight;
+      worse += ePlaced > eStraight * (1 + 1e-6) + 1e-12;
+      ++interior;
+    }
   }
   ASSERT_GT(compared, 500u);
   const double reduction = 1.0 - chosen / unrotated;
-  // the paper reports 15.5 %; with 8 candidates we measure about 55 % on these neighbourhoods
+  // the paper reports 15.5 %; with 8 candidates we measure about 40 % on these neighbourhoods
   EXPECT_GT(reduction, 0.3) << "mean split error reduction " << reduction;
   std::printf("split error reduction by orientation: %.1f %% over %llu splits\n", 100.0 * reduction,
               (unsigned long long)compared);
-  EXPECT_LT(reduction, 1.0);
+  ASSERT_GT(interior, 300);
+  EXPECT_EQ(worse, 0) << "placed splits worse than the unrotated template, of " << interior;
+  const double placedReduction = 1.0 - placedSum / unrotatedSum;
+  std::printf("placed children, %d interior splits: error reduction %.1f %%\n", interior,
+              100.0 * placedReduction);
+  EXPECT_NEAR(placedReduction, reduction, 0.1);
 }
 
 TEST(AdaptivityTest, SupportsBlendTowardsTheirMassSmall) {

@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include <algorithm>
+#include <cstdio>
 #include <cstring>
 
 #include "sim/ply_writer.h"
@@ -57,8 +59,11 @@ TEST(PhysicsTest, TankAtRestSettlesHydrostatically) {
     meanSpeed += double(p.v[i].norm()) / double(n);
     comAfter += p.x[i].cast<double>() / double(n);
   }
-  // residual jitter of a still tank with weak XSPH damping (measured ~2.5 cm/s mean after 2 s)
-  EXPECT_LT(meanSpeed, 0.04);
+  std::printf("tank at rest after 2 s: mean speed %.4f m/s, max %.4f m/s, centre of mass moved %.3g m\n",
+              meanSpeed, maxSpeed, (comAfter - comBefore).norm());
+  // residual jitter of a still tank with weak XSPH damping: measured 2.75 cm/s mean and 16.1 cm/s at most
+  // after 2 s; bounds 1.25x those
+  EXPECT_LT(meanSpeed, 0.035);
   EXPECT_LT(maxSpeed, 0.2);
   EXPECT_LT((comAfter - comBefore).norm(), 1e-3);
   // the walls carry the weight: boundary impulse per second equals -M g within 1%
@@ -97,12 +102,39 @@ TEST(PhysicsTest, DamBreakSmallStaysInsideAndConserves) {
   ASSERT_GT(n, 1500u);
   const double mass0 = sim.totalMass();
   const Vec3d p0 = sim.totalMomentum();
+  // mechanical energy, kinetic plus potential above the floor
+  auto energy = [&] {
+    const ParticleSet& p = sim.particles();
+    double e = 0.0;
+    for (std::size_t i = 0; i < p.size(); ++i)
+      e += double(p.m[i]) * (0.5 * double(p.v[i].squaredNorm()) + 9.81 * double(p.x[i].y()));
+    return e;
+  };
+  const double e0 = energy();
   double maxSpeed = 0.0;
+  double eMax = e0;
+  double ePrev = e0;
+  double gained = 0.0, worstGain = 0.0;
   while (sim.time() < 1.5) {
     ASSERT_NO_THROW(sim.step());
     for (const Vec3& v : sim.particles().v)
       maxSpeed = std::max(maxSpeed, double(v.norm()));
+    const double e = energy();
+    eMax = std::max(eMax, e);
+    gained += std::max(0.0, e - ePrev);
+    worstGain = std::max(worstGain, e - ePrev);
+    ePrev = e;
   }
+  // The water only loses mechanical energy (viscosity, the walls, the pressure solves): measured, the total
+  // never rose in any step (0 J gained over the run) and ended at 0.36 of its start (4.33 of 11.87 J; at rest
+  // it would be a third). Energy fed in by a wrong sign (anti-viscosity: 0.028 J gained over the run) fails;
+  // the bound is 1e-5 of the start (1.2e-4 J).
+  std::printf(
+      "dam break energy: start %.4f J, most %.4f J, end %.4f J, gained over steps %.3g J (worst step "
+      "%.3g J)\n",
+      e0, eMax, energy(), gained, worstGain);
+  EXPECT_LE(gained, 1e-5 * e0);
+  EXPECT_LT(energy(), 0.5 * e0);
   EXPECT_GT(maxSpeed, 1.5);  // the water really fell and ran
   // no escaped particle: all inside the container (boundary particles sit on its faces)
   for (const Vec3& x : sim.particles().x) {
@@ -113,8 +145,6 @@ TEST(PhysicsTest, DamBreakSmallStaysInsideAndConserves) {
     EXPECT_GE(x.z(), -0.1f);
     EXPECT_LE(x.z(), 0.1f);
   }
-  // total mass exactly conserved
-  EXPECT_EQ(sim.totalMass(), mass0);
   // momentum changes only by gravity and boundary forces
   const Vec3d gravityImpulse = mass0 * sim.time() * Vec3d(0, -9.81, 0);
   const Vec3d residual = sim.totalMomentum() - p0 - gravityImpulse - sim.boundaryImpulse();
@@ -131,13 +161,45 @@ TEST(PhysicsTest, CollidingBlocksSmallConserveMomentumWithoutWalls) {
       FluidBlock{Aabb(Vec3d(-0.25, -0.08, -0.08), Vec3d(-0.05, 0.08, 0.08)), Vec3d(1.0, 0.1, 0)});
   s.fluid.push_back(FluidBlock{Aabb(Vec3d(0.0, -0.1, -0.06), Vec3d(0.16, 0.06, 0.1)), Vec3d(-0.8, 0, 0.2)});
   Simulation sim(s);
+  const ParticleSet& p = sim.particles();
+  // the first block's particles by id (ids are the creation order, the first block first)
+  std::vector<std::uint8_t> inFirst(p.size(), 0);
+  for (std::size_t i = 0; i < p.size(); ++i)
+    inFirst[p.id[i]] = p.x[i].x() < -0.025f;
+  auto firstMomentum = [&] {
+    Vec3d m = Vec3d::Zero();
+    for (std::size_t i = 0; i < p.size(); ++i)
+      if (inFirst[p.id[i]])
+        m += double(p.m[i]) * p.v[i].cast<double>();
+    return m;
+  };
+  auto centreOfMass = [&] {
+    Vec3d c = Vec3d::Zero();
+    for (std::size_t i = 0; i < p.size(); ++i)
+      c += double(p.m[i]) * p.x[i].cast<double>();
+    return Vec3d(c / sim.totalMass());
+  };
   const Vec3d p0 = sim.totalMomentum();
+  const Vec3d first0 = firstMomentum();
+  const Vec3d com0 = centreOfMass();
   const double scale = sim.totalMass() * 1.0;
   while (sim.time() < 0.3)
     sim.step();
-  EXPECT_EQ(sim.boundaryImpulse(), Vec3d::Zero());
   EXPECT_LT((sim.totalMomentum() - p0).norm(), 1e-5 * scale) << (sim.totalMomentum() - p0).transpose();
-  EXPECT_GT(sim.runStats().densityIterations, 0u);  // the blocks did collide and push
+  // The blocks did collide and push each other: the first block has given up most of its x-momentum
+  // (measured: 3.53 -> 1.25 kg m/s), which a pressure solve that never acts (the blocks passing through each
+  // other) would not do. (The density solve needs only its minimum of 2 iterations a step here.)
+  const Vec3d first = firstMomentum();
+  EXPECT_LT(first.x(), 0.5 * first0.x());
+  std::printf(
+      "colliding blocks: first block's x-momentum %.4f -> %.4f kg m/s; density iterations %llu over %llu "
+      "steps; centre of mass off its uniform motion by %.3g m; boundary impulse %.3g\n",
+      first0.x(), first.x(), (unsigned long long)sim.runStats().densityIterations,
+      (unsigned long long)sim.runStats().steps,
+      (centreOfMass() - com0 - p0 / sim.totalMass() * sim.time()).norm(), sim.boundaryImpulse().norm());
+  // with no walls and no gravity the centre of mass moves uniformly with the total momentum (measured 2e-9 m
+  // off; a particle whose position is not advanced with its velocity moves it by ~1e-5 m)
+  EXPECT_LT((centreOfMass() - com0 - p0 / sim.totalMass() * sim.time()).norm(), 1e-7);
 }
 
 TEST(PhysicsTest, RunsAreBitIdenticalSmall) {

@@ -6,10 +6,12 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <thread>
 
 #include "engine/app_loop.h"
 #include "engine/app_session.h"
 #include "engine/presets.h"
+#include "engine/tracked_hands.h"
 
 using namespace fp;
 using namespace fp::engine;
@@ -101,7 +103,86 @@ class ClockPlatform : public AppPlatform {
   std::vector<double> times;
 };
 
+/// A headset-like platform: 10 ms frames that never wait for the steps (FrameClock::waitForSteps false); both
+/// tracked hands move along +x 2 mm a frame, their targets set in every frame, drawn or stepping.
+class DeadlinePlatform : public AppPlatform {
+ public:
+  explicit DeadlinePlatform(AppSession& session) : m_session(session) {}
+  bool running() override { return true; }
+  FrameClock beginFrame() override {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    FrameClock c;
+    c.dt = 0.01;
+    c.waitForSteps = false;
+    return c;
+  }
+  void input(AppSession& session, const FrameClock& clock) override {
+    EXPECT_FALSE(session.stepsRunning());
+    hands(session, clock);
+  }
+  void inputWhileStepping(AppSession& session, const FrameClock& clock) override {
+    EXPECT_TRUE(session.stepsRunning());
+    ++stepping;
+    hands(session, clock);
+  }
+  void capture(AppSession& session, int frame) override {
+    captured.push_back(frame);
+    times.push_back(session.simulation().time());
+  }
+  void draw(AppSession&, int frame) override { drawn.push_back(frame); }
+  int stepping = 0, frames = 0;
+  std::vector<int> captured, drawn;
+  std::vector<double> times;
+
+ private:
+  void hands(AppSession& session, const FrameClock& clock) {
+    ++frames;
+    TrackedJoints joints = JointReplay(input::JointTrack()).first();
+    const auto refs = trackedHandReferences(session.scene(), {}, 1.0);
+    for (std::size_t k = 0; k < 2; ++k) {
+      input::HandJoints j = refs[k].second;
+      for (input::JointPose& p : j.joint)
+        p.position.x() += 0.002 * frames;
+      j.valid = true;
+      joints[k] = j;
+    }
+    setTrackedTargets(session, joints, clock.dt);
+  }
+  AppSession& m_session;
+};
+
 }  // namespace
+
+// Frames with a deadline do not wait for steps that still run (here the first three steps take 60 ms each,
+// six frames): such a frame takes no state and starts no steps, it draws the last one again; the hands'
+// targets of those frames are queued, and the next steps pass through them all, so the hands arrive where the
+// last frame put them; the steps then run over the time of every frame in between.
+TEST(AppLoopTest, AFrameThatFindsTheStepsRunningDrawsTheLastStateAndQueuesTheHands) {
+  SessionConfig config;
+  config.scenePath = smallTank("uniform-low");
+  config.hand = false;
+  config.stepThread = true;
+  config.slowSteps = 3;
+  config.slowStepSeconds = 0.06;
+  AppSession session(config);
+  attachTrackedHands(session, {}, 1.0);
+  DeadlinePlatform platform(session);
+  const int frames = 40;
+  EXPECT_EQ(runAppLoop(session, platform, frames), frames);
+  EXPECT_EQ(int(platform.drawn.size()), frames);  // every frame drawn
+  EXPECT_EQ(int(platform.captured.size()) + platform.stepping, frames);
+  EXPECT_GE(platform.stepping, 3 * 3) << "each slow step spans about six frames";
+  EXPECT_TRUE(std::is_sorted(platform.times.begin(), platform.times.end()));
+  // the frames' targets all reached the solver: the palm ends within a few frames' motion (2 mm each) of
+  // the last target, 8 cm from where it started
+  const auto refs = trackedHandReferences(session.scene(), {}, 1.0);
+  const sim::Vec3d start = input::partPosesFromJoints(refs[0].second)[0].position;
+  const double moved = session.trackedHandParts(0)[0].position.x() - start.x();
+  EXPECT_GT(moved, 0.002 * frames - 0.02);
+  EXPECT_LE(moved, 0.002 * frames + 1e-9);
+  // the simulated time covers the frames' time (the deferred frames' time is given to the next steps)
+  EXPECT_GT(session.simulation().time(), 0.5 * 0.01 * frames);
+}
 
 TEST(AppLoopTest, ThePlatformsClockDecidesStepsDrawingAndRestarts) {
   SessionConfig config;

@@ -335,5 +335,29 @@ TEST(PartMotion, InterpolatesBetweenTheFramesEnds) {
   EXPECT_NEAR(motion.sample(5.0)[0].position.x(), 0.1, 1e-12);
 }
 
+// A batch of steps serving several frames (the headset while the solver lags) passes through every frame's
+// pose in turn, evenly spaced, rather than cutting from the first to the last: a hand that went into the
+// water and back out within the batch still pushes it. One pose through: the two-key motion, bit for bit.
+TEST(PartMotion, PassesThroughEveryQueuedFramesPose) {
+  input::PartMotion motion;
+  const auto from = partsAt(Vec3d(0, 0, 0)), down = partsAt(Vec3d(0, -0.1, 0)),
+             back = partsAt(Vec3d(0, 0, 0.1));
+  motion.set(from, std::vector<input::PartMotion::Parts>{down, back}, 1.0, 1.2);
+  EXPECT_NEAR(motion.sample(1.05)[0].position.y(), -0.05, 1e-12);
+  EXPECT_NEAR(motion.sample(1.1)[0].position.y(), -0.1, 1e-12);
+  EXPECT_NEAR(motion.sample(1.15)[0].position.y(), -0.05, 1e-12);
+  EXPECT_NEAR(motion.sample(1.15)[0].position.z(), 0.05, 1e-12);
+  EXPECT_NEAR(motion.sample(9.0)[0].position.z(), 0.1, 1e-12);
+  input::PartMotion one, two;
+  one.set(from, std::vector<input::PartMotion::Parts>{down}, 1.0, 1.2);
+  two.set(from, down, 1.0, 1.2);
+  for (double t : {0.9, 1.0, 1.0137, 1.1, 1.1999, 1.2, 1.3}) {
+    for (int k = 0; k < input::HandModel::kParts; ++k) {
+      EXPECT_EQ(one.sample(t)[k].position, two.sample(t)[k].position);
+      EXPECT_EQ(one.sample(t)[k].orientation.coeffs(), two.sample(t)[k].orientation.coeffs());
+    }
+  }
+}
+
 }  // namespace
 }  // namespace fp

@@ -13,7 +13,7 @@ std::string useTestRuntime(const std::string& dir) {
        {"FP_XR_NO_GL", "FP_XR_NO_HANDS", "FP_XR_NO_HMD", "FP_XR_NO_STAGE", "FP_XR_VIRTUAL_TIME",
         "FP_XR_PERIOD_NS", "FP_XR_SIZE", "FP_XR_FORMATS", "FP_XR_HEAD", "FP_XR_IPD", "FP_XR_HANDS_OFFSET",
         "FP_XR_CONTROLLERS", "FP_XR_HANDS", "FP_XR_EVENTS", "FP_XR_STATS", "FP_XR_FRAME_LOG", "FP_XR_CAPTURE",
-        "FP_XR_PROFILE"})
+        "FP_XR_PROFILE", "FP_XR_FRAME_HASH"})
     unsetenv(name);
   setenv("XR_RUNTIME_JSON", FP_TEST_RUNTIME_JSON, 1);
   setenv("XR_ENABLE_API_LAYERS", "XR_APILAYER_LUNARG_core_validation", 1);

@@ -103,6 +103,7 @@ struct Config {
   std::string events = env("FP_XR_EVENTS");
   std::string stats = env("FP_XR_STATS");
   std::string frameLog = env("FP_XR_FRAME_LOG");  // a line per xrEndFrame: display time, end time [ns]
+  bool frameHash = envOn("FP_XR_FRAME_HASH");     // the log's lines end with a hash of the left eye's image
   std::string capture =
       env("FP_XR_CAPTURE");  // "FRAME,DIR": the eyes of frame FRAME as DIR/eye0.ppm, eye1.ppm
   std::string profile = env("FP_XR_PROFILE", "/interaction_profiles/khr/simple_controller");
@@ -504,6 +505,27 @@ void captureImage(const Swapchain& sc, std::uint32_t image, const XrRect2Di& rec
     for (int x = rect.offset.x; x < rect.offset.x + rect.extent.width; ++x)
       out.write(reinterpret_cast<const char*>(&pixels[(std::size_t(y) * sc.width + x) * 4]), 3);
   }
+}
+
+// FNV-1a of a submitted colour image's pixels in `rect` (0 for a depth image)
+std::uint64_t hashImage(const Swapchain& sc, std::uint32_t image, const XrRect2Di& rect) {
+  if (sc.format == 33190 || sc.format == 36012)
+    return 0;
+  GLint bound = 0;
+  g_gl.getIntegerv(GL_TEXTURE_BINDING_2D, &bound);
+  g_gl.bindTexture(GL_TEXTURE_2D, sc.textures[image]);
+  std::vector<unsigned char> pixels(std::size_t(sc.width) * sc.height * 4);
+  g_gl.pixelStorei(GL_PACK_ALIGNMENT, 1);
+  g_gl.getTexImage(GL_TEXTURE_2D, 0, GL_RGBA, GL_UNSIGNED_BYTE, pixels.data());
+  g_gl.bindTexture(GL_TEXTURE_2D, GLuint(bound));
+  std::uint64_t h = 1469598103934665603ull;
+  for (int y = rect.offset.y; y < rect.offset.y + rect.extent.height; ++y) {
+    for (int x = rect.offset.x; x < rect.offset.x + rect.extent.width; ++x) {
+      for (int c = 0; c < 4; ++c)
+        h = (h ^ pixels[(std::size_t(y) * sc.width + x) * 4 + c]) * 1099511628211ull;
+    }
+  }
+  return h;
 }
 
 // ---- enumerations: the two-call idiom ----
@@ -992,6 +1014,15 @@ XRAPI_ATTR XrResult XRAPI_CALL EndFrame(XrSession session, const XrFrameEndInfo*
         const Swapchain* sc =
             proj ? lookup<Swapchain>(handleOf(proj->views[v].subImage.swapchain), Kind::Swapchain) : nullptr;
         log << ' ' << (sc ? sc->acquiredAt : 0) << ' ' << (sc ? sc->releasedAt : 0);
+      }
+      if (g_config->frameHash) {
+        const auto* proj = info->layerCount
+                               ? reinterpret_cast<const XrCompositionLayerProjection*>(info->layers[0])
+                               : nullptr;
+        const Swapchain* sc =
+            proj ? lookup<Swapchain>(handleOf(proj->views[0].subImage.swapchain), Kind::Swapchain) : nullptr;
+        log << ' '
+            << (sc ? hashImage(*sc, std::uint32_t(sc->released), proj->views[0].subImage.imageRect) : 0);
       }
       log << '\n';
     }

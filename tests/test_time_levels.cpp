@@ -1,0 +1,72 @@
+// Time levels (docs/method.md, Time levels; time_levels = 2): particles whose own CFL step is twice the
+// global one, and whose neighbours' is too, skip the solves of every other step and drift. The physics of the
+// adaptive tests with the mode on: a tank at rest stays still, a dam break stays bounded and conserves mass,
+// and the gravity impulse reaches every particle.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+
+#include "sim/simulation.h"
+#include "tests/scene_fixtures.h"
+
+using namespace fp::sim;
+using fp::test::tankScene;
+
+TEST(TimeLevelsTest, TankAtRestSmallStaysStillWithHeldParticles) {
+  SceneDesc scene = tankScene(Vec3d(0.2, 0.2, 0.2), Vec3d(-0.2, 0.0, -0.2), Vec3d(0.2, 0.3, 0.2), 0.2 / 20.4);
+  scene.mode = AdaptivityMode::FluidPlaying;
+  scene.params.timeLevels = 2;
+  Simulation sim(scene);
+  const double mass0 = sim.totalMass();
+  while (sim.time() < 1.0)
+    sim.step();
+  const RunStats& run = sim.runStats();
+  const double held = double(run.heldParticleSteps) / double(run.particleSteps);
+  const ParticleSet& p = sim.particles();
+  double top = 0.0;
+  double e = 0.0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    top = std::max(top, double(p.x[i].y()));
+    e += 0.5 * double(p.m[i]) * double(p.v[i].squaredNorm());
+  }
+  const double vrms = std::sqrt(2.0 * e / mass0);
+  std::printf(
+      "tank at rest, time_levels = 2: %.1f %% of particle-steps held, %.1f %% on level 1, top %.4f m, "
+      "rms speed %.4f m/s, mean density error %.3f %%\n",
+      100.0 * held, 100.0 * double(run.level1ParticleSteps) / double(run.particleSteps), top, vrms,
+      100.0 * run.densityErrorSum / double(run.steps));
+  EXPECT_GT(held, 0.2);
+  EXPECT_NEAR(sim.totalMass(), mass0, 1e-6 * mass0);
+  EXPECT_NEAR(top, 0.3, 0.03);
+  EXPECT_LT(vrms, 0.3);
+}
+
+TEST(TimeLevelsTest, DamBreakSmallBoundedConservingMassAndGravityImpulse) {
+  SceneDesc scene = tankScene(Vec3d(0.3, 0.2, 0.1), Vec3d(-0.3, 0.0, -0.1), Vec3d(-0.05, 0.3, 0.1), 0.008);
+  scene.mode = AdaptivityMode::FluidPlaying;
+  scene.params.timeLevels = 2;
+  Simulation sim(scene);
+  const double mass0 = sim.totalMass();
+  const Vec3d p0 = sim.totalMomentum();
+  while (sim.time() < 1.0)
+    ASSERT_NO_THROW(sim.step());
+  const RunStats& run = sim.runStats();
+  EXPECT_GT(run.heldParticleSteps, 0u);
+  EXPECT_NEAR(sim.totalMass(), mass0, 1e-6 * mass0);
+  // Held particles take the reaction of their active neighbours' pressure, and the gravity of the held step
+  // comes with the next one; XSPH across the interface is one-sided in a held step, so momentum is conserved
+  // to 3e-4 (measured), not to round-off as with one time step (2.2e-2 without the reaction).
+  const Vec3d gravityImpulse = mass0 * sim.time() * Vec3d(0, -9.81, 0);
+  const Vec3d residual = sim.totalMomentum() - p0 - gravityImpulse - sim.boundaryImpulse();
+  std::printf(
+      "dam break, time_levels = 2: %.1f %% of particle-steps held; momentum residual %.2e of the "
+      "gravity impulse\n",
+      100.0 * double(run.heldParticleSteps) / double(run.particleSteps),
+      residual.norm() / gravityImpulse.norm());
+  EXPECT_LT(residual.norm(), 1e-3 * gravityImpulse.norm()) << residual.transpose();
+  for (const Vec3& x : sim.particles().x) {
+    EXPECT_GE(x.y(), 0.0f);
+    EXPECT_LE(std::abs(x.x()), 0.3f);
+  }
+}
