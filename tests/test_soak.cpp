@@ -110,6 +110,16 @@ SoakFigures soak(double seconds, double settle) {
   const double frameRate = session.scene().frameRate;
   const int frames = int(std::lround(seconds * frameRate));
   const auto start = std::chrono::steady_clock::now();
+  // the run's totals so far (the trace and the end)
+  const auto recordTotals = [&](const sim::Simulation& sim) {
+    f.simTime = sim.time();
+    f.steps = sim.runStats().steps;
+    f.splits = sim.runStats().adaptivity.splits;
+    f.merges = sim.runStats().adaptivity.merges;
+    f.rssEnd = residentBytes();
+    f.simBytesEnd = double(sim.memoryBytes());
+    f.wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  };
   auto fail = [&f](const std::string& what) {
     if (f.failure.empty())
       f.failure = what;
@@ -175,13 +185,7 @@ SoakFigures soak(double seconds, double settle) {
     // a long soak may not end within a session: with FP_SOAK_TRACE the figures so far every 10 simulated s
     if (std::getenv("FP_SOAK_TRACE") && (frame + 1) % 600 == 0) {
       f.frames = frame + 1;
-      f.simTime = t;
-      f.steps = sim.runStats().steps;
-      f.splits = sim.runStats().adaptivity.splits;
-      f.merges = sim.runStats().adaptivity.merges;
-      f.rssEnd = residentBytes();
-      f.simBytesEnd = double(sim.memoryBytes());
-      f.wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      recordTotals(sim);
       std::cout << "--- so far: " << f << std::flush;
     }
     session.setHandTarget(session.handPose());
@@ -191,13 +195,7 @@ SoakFigures soak(double seconds, double settle) {
   }
   session.finishSteps();
   const sim::Simulation& sim = session.simulation();
-  f.simTime = sim.time();
-  f.steps = sim.runStats().steps;
-  f.splits = sim.runStats().adaptivity.splits;
-  f.merges = sim.runStats().adaptivity.merges;
-  f.rssEnd = residentBytes();
-  f.simBytesEnd = double(sim.memoryBytes());
-  f.wallSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  recordTotals(sim);
   return f;
 }
 
