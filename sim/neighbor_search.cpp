@@ -138,9 +138,9 @@ inline int floorCell(Real f) {
 
 }  // namespace
 
-void NeighborSearch::build(const UniformGrid& grid, const std::vector<Vec3>& qx, const std::vector<Real>& qH,
-                           const std::vector<GridPoints>& sources, int selfSource, Real maxH,
-                           NeighborList& out) {
+void NeighborSearch::buildLists(const UniformGrid& grid, const std::vector<Vec3>& qx,
+                                const std::vector<Real>& qH, const std::vector<GridPoints>& sources,
+                                int selfSource, Real maxH, NeighborList& out, bool ownSupport) {
   const std::size_t n = qx.size();
   const std::size_t nChunks = (n + kChunk - 1) / kChunk;
   const Eigen::Vector3i dims = grid.dims();
@@ -185,8 +185,8 @@ void NeighborSearch::build(const UniformGrid& grid, const std::vector<Vec3>& qx,
   m_cellMaxH.resize(sources.size());
   m_windowMaxH.resize(sources.size());
   // every query's reach of a source with per-point supports is at most this many cells (queries with larger
-  // supports do without the window)
-  const int windowReach = std::max(1, int(std::ceil(maxH * invCell)));
+  // supports do without the window; the own-support search adds the margin to its reach, see below)
+  const int windowReach = std::max(1, int(std::ceil((ownSupport ? maxH + margin : maxH) * invCell)));
   const int nx = dims.x();
   const std::size_t nRows = std::size_t(dims.y()) * std::size_t(dims.z());
   for (std::size_t s = 0; s < sources.size(); ++s) {
@@ -256,18 +256,35 @@ void NeighborSearch::build(const UniformGrid& grid, const std::vector<Vec3>& qx,
         const std::uint32_t skip =
             s == selfSource ? std::uint32_t(i) : std::numeric_limits<std::uint32_t>::max();
         const std::uint32_t offset = src.indexOffset;
-        // the largest pair support this particle can have with this source
-        const Real hMax = Real(0.5) * (Hi + (src.H ? maxH : src.uniformH));
+        // the largest pair support this particle can have with this source (with its own support only:
+        // H_i, since then H_j <= H_i)
+        const Real hMax = ownSupport && src.H ? std::min(Hi, Real(0.5) * (Hi + maxH))
+                                              : Real(0.5) * (Hi + (src.H ? maxH : src.uniformH));
+        // the largest support of the points kept
+        const Real hCap = ownSupport ? Hi : std::numeric_limits<Real>::infinity();
         const Real hMax2 = hMax * hMax;
         // a source wholly out of reach (the hand, far from most of the water) costs no row at all
         if ((xi - xi.cwiseMax(bounds[std::size_t(s)].min()).cwiseMin(bounds[std::size_t(s)].max()))
                 .squaredNorm() >= hMax2)
           continue;
         const int reach = std::max(1, int(std::ceil(hMax * invCell)));
-        const bool windowed = reach <= windowReach;
-        const int x0 = std::max(0, c.x() - reach), x1 = std::min(dims.x() - 1, c.x() + reach);
-        const int y0 = std::max(0, c.y() - reach), y1 = std::min(dims.y() - 1, c.y() + reach);
-        const int z0 = std::max(0, c.z() - reach), z1 = std::min(dims.z() - 1, c.z() + reach);
+        int x0 = std::max(0, c.x() - reach), x1 = std::min(dims.x() - 1, c.x() + reach);
+        int y0 = std::max(0, c.y() - reach), y1 = std::min(dims.y() - 1, c.y() + reach);
+        int z0 = std::max(0, c.z() - reach), z1 = std::min(dims.z() - 1, c.z() + reach);
+        if (ownSupport) {
+          // The cells that x_i -+ (hMax + margin) fall in, as the sort rounds: a superset of build()'s
+          // (a pair of supports H_i = H_j = one cell, 2r apart twice, lies two cells apart when the cell
+          // index rounds down for i and up for j; build() finds it through the coarser reach, a reach of
+          // ceil(H_i / cell) cells would miss it).
+          const Real w = hMax + margin;
+          x0 = std::max(0, floorCell((xi.x() - w - origin.x()) * invCell));
+          x1 = std::min(dims.x() - 1, floorCell((xi.x() + w - origin.x()) * invCell));
+          y0 = std::max(0, floorCell((xi.y() - w - origin.y()) * invCell));
+          y1 = std::min(dims.y() - 1, floorCell((xi.y() + w - origin.y()) * invCell));
+          z0 = std::max(0, floorCell((xi.z() - w - origin.z()) * invCell));
+          z1 = std::min(dims.z() - 1, floorCell((xi.z() + w - origin.z()) * invCell));
+        }
+        const bool windowed = x0 >= c.x() - windowReach && x1 <= c.x() + windowReach;
         for (int cz = z0; cz <= z1; ++cz) {
           const Real dz = slabDistance(xi.z(), origin.z() + Real(cz) * cell, cell, margin);
           for (int cy = y0; cy <= y1; ++cy) {
@@ -344,13 +361,13 @@ void NeighborSearch::build(const UniformGrid& grid, const std::vector<Vec3>& qx,
               for (std::uint32_t j = b; j < e; ++j) {
                 const Real h = Real(0.5) * (Hi + sH[j]);
                 o[kept] = j + offset;
-                kept += std::size_t((j != skip) & ((xi - sx[j]).squaredNorm() < h * h));
+                kept += std::size_t((j != skip) & ((xi - sx[j]).squaredNorm() < h * h) & (sH[j] <= hCap));
               }
               count += kept;
             } else {
               for (std::uint32_t j = b; j < e; ++j) {
                 const Real h = Real(0.5) * (Hi + sH[j]);
-                if (j != skip && (xi - sx[j]).squaredNorm() < h * h)
+                if (j != skip && (xi - sx[j]).squaredNorm() < h * h && sH[j] <= hCap)
                   emit(j + offset);
               }
             }
@@ -429,6 +446,94 @@ void NeighborSearch::build(const UniformGrid& grid, const std::vector<Vec3>& qx,
                           out.offsets[i + 1] += base;
                       }
                     });
+}
+
+void NeighborSearch::buildSymmetric(const UniformGrid& grid, const std::vector<Vec3>& x,
+                                    const std::vector<Real>& H, const std::vector<std::uint32_t>& cells,
+                                    Real maxH, NeighborList& out) {
+  using Range = tbb::blocked_range<std::size_t>;
+  const std::size_t n = x.size();
+  const std::size_t nChunks = (n + kChunk - 1) / kChunk;
+  // A fine point next to coarse ones otherwise searches as far as the coarsest pair support, twice its own
+  // in the adaptive modes; here it searches as far as its own, and the pairs with larger points come from
+  // theirs (a pair is within reach of the larger point's support).
+  buildLists(grid, x, H, {GridPoints{x.data(), H.data(), 0, &cells, 0}}, 0, maxH, m_own, true);
+  const std::uint32_t* ownOff = m_own.offsets.data();
+  const std::uint32_t* own = m_own.indices.data();
+  const Real* h = H.data();
+  // the pairs (i, j) with H_j < H_i, to be handed to j: counted and written per chunk of points i
+  m_chunkPairs.assign(nChunks + 1, 0);
+  tbb::parallel_for(Range(0, nChunks, 1), [&](const Range& cr) {
+    for (std::size_t chunk = cr.begin(); chunk < cr.end(); ++chunk) {
+      std::size_t count = 0;
+      const std::size_t i1 = std::min(n, (chunk + 1) * kChunk);
+      for (std::size_t i = chunk * kChunk; i < i1; ++i) {
+        for (std::uint32_t k = ownOff[i]; k < ownOff[i + 1]; ++k)
+          count += std::size_t(h[own[k]] < h[i]);
+      }
+      m_chunkPairs[chunk + 1] = count;
+    }
+  });
+  for (std::size_t chunk = 0; chunk < nChunks; ++chunk)
+    m_chunkPairs[chunk + 1] += m_chunkPairs[chunk];
+  m_incoming.resize(m_chunkPairs[nChunks]);
+  tbb::parallel_for(Range(0, nChunks, 1), [&](const Range& cr) {
+    for (std::size_t chunk = cr.begin(); chunk < cr.end(); ++chunk) {
+      std::uint64_t* dst = m_incoming.data() + m_chunkPairs[chunk];
+      const std::size_t i1 = std::min(n, (chunk + 1) * kChunk);
+      for (std::size_t i = chunk * kChunk; i < i1; ++i) {
+        for (std::uint32_t k = ownOff[i]; k < ownOff[i + 1]; ++k) {
+          const std::uint32_t j = own[k];
+          if (h[j] < h[i])
+            *dst++ = (std::uint64_t(j) << 32) | std::uint64_t(i);
+        }
+      }
+    }
+  });
+  // unique keys: the same order whatever the thread count; each point's received pairs in ascending order
+  tbb::parallel_sort(m_incoming.begin(), m_incoming.end());
+  // i's list starts after the own lists of the points before it and the pairs they received
+  out.offsets.resize(n + 1);
+  tbb::parallel_for(Range(0, n + 1, 256), [&](const Range& r) {
+    for (std::size_t i = r.begin(); i < r.end(); ++i) {
+      const std::size_t received =
+          std::size_t(std::lower_bound(m_incoming.begin(), m_incoming.end(), std::uint64_t(i) << 32) -
+                      m_incoming.begin());
+      out.offsets[i] = std::uint32_t(ownOff[i] + received);
+    }
+  });
+  const std::size_t total = std::size_t(out.offsets[n]);
+  if (out.indices.capacity() < total || out.indices.capacity() > 2 * (total + total / 16)) {
+    std::vector<std::uint32_t> fitted;
+    fitted.reserve(total + total / 16);
+    out.indices.swap(fitted);
+  }
+  out.indices.resize(total);
+  // both parts ascending: merged, they are build()'s list
+  tbb::parallel_for(Range(0, n, 256), [&](const Range& r) {
+    for (std::size_t i = r.begin(); i < r.end(); ++i) {
+      std::uint32_t* dst = out.indices.data() + out.offsets[i];
+      std::uint32_t a = ownOff[i];
+      const std::uint32_t aEnd = ownOff[i + 1];
+      std::size_t b = std::size_t(out.offsets[i] - ownOff[i]);
+      const std::size_t bEnd = std::size_t(out.offsets[i + 1] - ownOff[i + 1]);
+      while (a < aEnd && b < bEnd) {
+        const std::uint32_t fromOwn = own[a];
+        const std::uint32_t fromLarger = std::uint32_t(m_incoming[b]);
+        if (fromOwn < fromLarger) {
+          *dst++ = fromOwn;
+          ++a;
+        } else {
+          *dst++ = fromLarger;
+          ++b;
+        }
+      }
+      while (a < aEnd)
+        *dst++ = own[a++];
+      while (b < bEnd)
+        *dst++ = std::uint32_t(m_incoming[b++]);
+    }
+  });
 }
 
 }  // namespace fp::sim
