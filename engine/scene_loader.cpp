@@ -20,6 +20,7 @@
 //       "name": "tank",                  // optional (default: shape and index)
 //       "shape": "box" | "sphere" | "capsule" | "mesh",   // required
 //       "container": true,               // box only, optional: the fluid is inside the box
+//       "headroom": 0.28,                // container only, optional, >= 0: walls and lid raised (default 0)
 //       "half_extents": [..],            // box, required, each > 0
 //       "radius": 0.1,                   // sphere and capsule, required, > 0
 //       "half_length": 0.2,              // capsule, required, >= 0 (cap centres at local y = +-half_length)
@@ -118,8 +119,8 @@ sim::Quatd SceneReader::readRotation(const json& j, const std::string& path) con
 sim::ColliderDesc SceneReader::readCollider(const json& j, const std::string& path, std::size_t index) const {
   const std::vector<std::string> common = {"name",   "shape",           "position",        "rotation",
                                            "driven", "linear_velocity", "angular_velocity"};
-  const std::vector<std::string> shapeKeys = {"container",   "half_extents", "radius",
-                                              "half_length", "file",         "scale"};
+  const std::vector<std::string> shapeKeys = {"container",   "headroom", "half_extents", "radius",
+                                              "half_length", "file",     "scale"};
   std::vector<std::string> allowed = common;
   allowed.insert(allowed.end(), shapeKeys.begin(), shapeKeys.end());
   expectObject(j, path, allowed);
@@ -131,7 +132,7 @@ sim::ColliderDesc SceneReader::readCollider(const json& j, const std::string& pa
     std::vector<std::string> keys;
   };
   const std::vector<ShapeSpec> shapes = {
-      {"box", sim::ShapeType::Box, {"container", "half_extents"}},
+      {"box", sim::ShapeType::Box, {"container", "headroom", "half_extents"}},
       {"sphere", sim::ShapeType::Sphere, {"radius"}},
       {"capsule", sim::ShapeType::Capsule, {"radius", "half_length"}},
       {"mesh", sim::ShapeType::Mesh, {"file", "scale"}},
@@ -153,7 +154,7 @@ sim::ColliderDesc SceneReader::readCollider(const json& j, const std::string& pa
       used = used || k == key;
     if (used)
       continue;
-    if (key == "container")
+    if (key == "container" || key == "headroom")
       fail(memberPath(path, key), "only a box can be a container (shape is " + shapeName + ")");
     fail(memberPath(path, key),
          "not used by a " + shapeName + " collider (allowed: " + sim::joinNames(spec->keys) + ")");
@@ -171,6 +172,14 @@ sim::ColliderDesc SceneReader::readCollider(const json& j, const std::string& pa
         readPositive(j["half_extents"][i], indexPath(hePath, i));
       if (j.contains("container"))
         c.container = readBool(j["container"], memberPath(path, "container"));
+      if (j.contains("headroom")) {
+        const std::string hrPath = memberPath(path, "headroom");
+        if (!c.container)
+          fail(hrPath, "only a container has headroom (set \"container\": true)");
+        c.headroom = readNumber(j["headroom"], hrPath);
+        if (c.headroom < 0.0)
+          fail(hrPath, "must be >= 0 (got " + fmt(c.headroom) + ")");
+      }
       break;
     }
     case sim::ShapeType::Sphere:

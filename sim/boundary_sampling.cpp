@@ -308,9 +308,18 @@ std::vector<Vec3d> sampleMeshSurface(const TriangleMesh& mesh, double spacing) {
 
 std::vector<Vec3d> sampleColliderLocal(const ColliderDesc& collider, double spacing) {
   switch (collider.shape) {
-    case ShapeType::Box:
-      // A container is sampled like a box: its walls are the same faces, only the solid side differs.
-      return sampleBoxSurface(collider.halfExtents, spacing);
+    case ShapeType::Box: {
+      if (!collider.container)
+        return sampleBoxSurface(collider.halfExtents, spacing);
+      // A container is sampled like a box: its walls are the same faces, only the solid side differs. Its
+      // headroom raises the lid (the top face) and lengthens the walls up to it.
+      checkLength("container headroom", collider.headroom);
+      const Vec3d raise(0.0, 0.5 * collider.headroom, 0.0);
+      std::vector<Vec3d> points = sampleBoxSurface(collider.halfExtents + raise, spacing);
+      for (Vec3d& p : points)
+        p += raise;
+      return points;
+    }
     case ShapeType::Sphere:
       return sampleSphereSurface(collider.radius, spacing);
     case ShapeType::Capsule:

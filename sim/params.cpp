@@ -97,8 +97,9 @@ ParamTable::ParamTable() : ParamTableOf<SimParams>("parameter", &ParamTable::val
   add("support_blend_steps", "adaptivity", "steps", 0, 100, live,
       "steps over which a changed support radius is blended in (0: at once)", &P::supportBlendSteps, 10);
   add("split_blend_steps", "adaptivity", "steps", 0, 100, live,
-      "steps over which a split child's density and velocity are blended from its parent's (0: off)",
-      &P::splitBlendSteps, 10);
+      "steps over which a split child's density and velocity are blended from its parent's (0: off; off by "
+      "default: docs/method.md)",
+      &P::splitBlendSteps, 0);
   // splash enhancement (docs/method.md, Splash)
   add("splash_enabled", "splash", "-", 0, 1, live, "generate splash particles (render only)",
       &P::splashEnabled, true);

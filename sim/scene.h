@@ -63,6 +63,7 @@ struct ColliderDesc {
   double halfLength = 0.1;                   ///< capsule: half distance between the cap centres, local y [m]
   std::shared_ptr<const TriangleMesh> mesh;  ///< mesh shape, already scaled, local frame
   bool container = false;                    ///< box only: the fluid is inside, the walls face inwards
+  double headroom = 0.0;                     ///< container only: walls and lid raised this far, unseen [m]
   Vec3d position{0.0, 0.0, 0.0};             ///< origin of the local frame in the world [m]
   Quatd orientation = Quatd::Identity();     ///< rotation local -> world
   Vec3d linearVelocity{0.0, 0.0, 0.0};       ///< constant velocity [m/s]

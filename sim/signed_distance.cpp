@@ -274,8 +274,12 @@ std::shared_ptr<const MeshSdfData> cachedMeshSdfData(const std::shared_ptr<const
 double signedDistanceLocal(const ColliderDesc& collider, const Vec3d& localPoint) {
   switch (collider.shape) {
     case ShapeType::Box: {
-      const double d = boxSdf(collider.halfExtents, localPoint);
-      return collider.container ? -d : d;
+      if (collider.container) {
+        // the walls and the lid are those of the box raised by the headroom (see ColliderDesc::headroom)
+        const Vec3d raise(0.0, 0.5 * collider.headroom, 0.0);
+        return -boxSdf(collider.halfExtents + raise, localPoint - raise);
+      }
+      return boxSdf(collider.halfExtents, localPoint);
     }
     case ShapeType::Sphere:
       return localPoint.norm() - collider.radius;

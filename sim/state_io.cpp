@@ -526,6 +526,8 @@ std::uint64_t sceneHash(const SceneDesc& scene) {
     h.add(c.radius);
     h.add(c.halfLength);
     h.add(std::uint8_t(c.container));
+    if (c.headroom != 0.0)  // (only when set: the hashes of the scenes without it stay as they were)
+      h.add(c.headroom);
     h.add(c.position);
     h.add(c.orientation);
     h.add(c.linearVelocity);

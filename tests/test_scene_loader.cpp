@@ -16,6 +16,8 @@
 #include "engine/json_reader.h"
 #include "engine/presets.h"
 #include "engine/scene_loader.h"
+#include "sim/boundary_sampling.h"
+#include "sim/signed_distance.h"
 
 namespace fp::engine {
 namespace {
@@ -392,6 +394,41 @@ TEST(SceneLoaderTest, ContainerOnSphere) {
   s["colliders"][1]["container"] = true;
   const std::string message = errorOf(s);
   EXPECT_TRUE(namesPath(message, "$.colliders[1].container"));
+  EXPECT_TRUE(contains(message, "only a box")) << message;
+}
+
+TEST(SceneLoaderTest, HeadroomRaisesAContainersWallsAndLid) {
+  json s = validScene();
+  s["colliders"][0]["headroom"] = 0.3;
+  const sim::SceneDesc scene = parseScene(s.dump(2), "scene.json", "");
+  const sim::ColliderDesc& tank = scene.colliders[0];
+  EXPECT_DOUBLE_EQ(tank.headroom, 0.3);
+  // the lid 0.3 above the box's top face (0.9), the floor where it was; inside the raised part is water's
+  // side
+  double top = -1e9, bottom = 1e9;
+  for (const sim::Vec3d& p : sim::sampleColliderLocal(tank, 0.1)) {
+    top = std::max(top, p.y());
+    bottom = std::min(bottom, p.y());
+  }
+  EXPECT_DOUBLE_EQ(top, 1.2);
+  EXPECT_DOUBLE_EQ(bottom, -0.9);
+  EXPECT_NEAR(sim::signedDistanceLocal(tank, sim::Vec3d(0.0, 1.0, 0.0)), 0.2, 1e-12);
+  EXPECT_NEAR(sim::signedDistanceLocal(tank, sim::Vec3d(0.0, -0.8, 0.0)), 0.1, 1e-12);
+  EXPECT_NEAR(sim::signedDistanceLocal(tank, sim::Vec3d(0.0, 1.3, 0.0)), -0.1, 1e-12);
+
+  s["colliders"][0]["headroom"] = -0.1;
+  std::string message = errorOf(s);
+  EXPECT_TRUE(namesPath(message, "$.colliders[0].headroom"));
+  EXPECT_TRUE(contains(message, "must be >= 0")) << message;
+  s["colliders"][0]["headroom"] = 0.1;
+  s["colliders"][0]["container"] = false;
+  message = errorOf(s);
+  EXPECT_TRUE(namesPath(message, "$.colliders[0].headroom"));
+  EXPECT_TRUE(contains(message, "only a container")) << message;
+  s["colliders"][0]["container"] = true;
+  s["colliders"][1]["headroom"] = 0.1;
+  message = errorOf(s);
+  EXPECT_TRUE(namesPath(message, "$.colliders[1].headroom"));
   EXPECT_TRUE(contains(message, "only a box")) << message;
 }
 

@@ -50,6 +50,7 @@ TEST(SplitBlendingTest, VelocityBlendConservesMomentumAndPullsSiblingsTogether) 
 TEST(SplitBlendingTest, ChildrenStartCloserToTheirParentWithBlending) {
   SceneDesc scene = tankScene(Vec3d(0.3, 0.2, 0.1), Vec3d(-0.3, 0.0, -0.1), Vec3d(-0.05, 0.3, 0.1), 0.008);
   scene.mode = AdaptivityMode::FluidPlaying;
+  scene.params.splitBlendSteps = 10;  // off by default (docs/method.md, Temporal blending)
   Simulation blended(scene);
   // the first step from 0.1 s on that splits a few particles
   while (blended.time() < 0.1 || blended.lastStep().adaptivity.splits < 3)

@@ -488,9 +488,8 @@ struct Gl {
   }
 } g_gl;
 
-void captureImage(const Swapchain& sc, std::uint32_t image, const XrRect2Di& rect, const std::string& path) {
-  if (sc.format == 33190 || sc.format == 36012)
-    return;
+// a colour swapchain image's RGBA pixels, bottom row first (the texture binding is restored)
+std::vector<unsigned char> readImage(const Swapchain& sc, std::uint32_t image) {
   GLint bound = 0;
   g_gl.getIntegerv(GL_TEXTURE_BINDING_2D, &bound);
   g_gl.bindTexture(GL_TEXTURE_2D, sc.textures[image]);
@@ -498,6 +497,13 @@ void captureImage(const Swapchain& sc, std::uint32_t image, const XrRect2Di& rec
   g_gl.pixelStorei(GL_PACK_ALIGNMENT, 1);
   g_gl.getTexImage(GL_TEXTURE_2D, 0, GL_RGBA, GL_UNSIGNED_BYTE, pixels.data());
   g_gl.bindTexture(GL_TEXTURE_2D, GLuint(bound));
+  return pixels;
+}
+
+void captureImage(const Swapchain& sc, std::uint32_t image, const XrRect2Di& rect, const std::string& path) {
+  if (sc.format == 33190 || sc.format == 36012)
+    return;
+  const std::vector<unsigned char> pixels = readImage(sc, image);
   std::ofstream out(path, std::ios::binary);
   out << "P6\n" << rect.extent.width << " " << rect.extent.height << "\n255\n";
   // GL rows run bottom-up; the image file top-down
@@ -511,13 +517,7 @@ void captureImage(const Swapchain& sc, std::uint32_t image, const XrRect2Di& rec
 std::uint64_t hashImage(const Swapchain& sc, std::uint32_t image, const XrRect2Di& rect) {
   if (sc.format == 33190 || sc.format == 36012)
     return 0;
-  GLint bound = 0;
-  g_gl.getIntegerv(GL_TEXTURE_BINDING_2D, &bound);
-  g_gl.bindTexture(GL_TEXTURE_2D, sc.textures[image]);
-  std::vector<unsigned char> pixels(std::size_t(sc.width) * sc.height * 4);
-  g_gl.pixelStorei(GL_PACK_ALIGNMENT, 1);
-  g_gl.getTexImage(GL_TEXTURE_2D, 0, GL_RGBA, GL_UNSIGNED_BYTE, pixels.data());
-  g_gl.bindTexture(GL_TEXTURE_2D, GLuint(bound));
+  const std::vector<unsigned char> pixels = readImage(sc, image);
   std::uint64_t h = 1469598103934665603ull;
   for (int y = rect.offset.y; y < rect.offset.y + rect.extent.height; ++y) {
     for (int x = rect.offset.x; x < rect.offset.x + rect.extent.width; ++x) {
