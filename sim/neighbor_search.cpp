@@ -458,7 +458,7 @@ void NeighborSearch::buildSymmetric(const UniformGrid& grid, const std::vector<V
   const Real* h = H.data();
   // the pairs (i, j) with H_j < H_i, to be handed to j: counted and written per chunk of points i
   m_chunkPairs.assign(nChunks + 1, 0);
-  tbb::parallel_for(Range(0, nChunks, 1), [&](const Range& cr) {
+  parallelFor(Range(0, nChunks, 1), [&](const Range& cr) {
     for (std::size_t chunk = cr.begin(); chunk < cr.end(); ++chunk) {
       std::size_t count = 0;
       const std::size_t i1 = std::min(n, (chunk + 1) * kChunk);
@@ -472,7 +472,7 @@ void NeighborSearch::buildSymmetric(const UniformGrid& grid, const std::vector<V
   for (std::size_t chunk = 0; chunk < nChunks; ++chunk)
     m_chunkPairs[chunk + 1] += m_chunkPairs[chunk];
   m_incoming.resize(m_chunkPairs[nChunks]);
-  tbb::parallel_for(Range(0, nChunks, 1), [&](const Range& cr) {
+  parallelFor(Range(0, nChunks, 1), [&](const Range& cr) {
     for (std::size_t chunk = cr.begin(); chunk < cr.end(); ++chunk) {
       std::uint64_t* dst = m_incoming.data() + m_chunkPairs[chunk];
       const std::size_t i1 = std::min(n, (chunk + 1) * kChunk);
@@ -486,10 +486,10 @@ void NeighborSearch::buildSymmetric(const UniformGrid& grid, const std::vector<V
     }
   });
   // unique keys: the same order whatever the thread count; each point's received pairs in ascending order
-  tbb::parallel_sort(m_incoming.begin(), m_incoming.end());
+  parallelSort(m_incoming.begin(), m_incoming.end());
   // i's list starts after the own lists of the points before it and the pairs they received
   out.offsets.resize(n + 1);
-  tbb::parallel_for(Range(0, n + 1, 256), [&](const Range& r) {
+  parallelFor(Range(0, n + 1, 256), [&](const Range& r) {
     for (std::size_t i = r.begin(); i < r.end(); ++i) {
       const std::size_t received =
           std::size_t(std::lower_bound(m_incoming.begin(), m_incoming.end(), std::uint64_t(i) << 32) -
@@ -505,7 +505,7 @@ void NeighborSearch::buildSymmetric(const UniformGrid& grid, const std::vector<V
   }
   out.indices.resize(total);
   // both parts ascending: merged, they are build()'s list
-  tbb::parallel_for(Range(0, n, 256), [&](const Range& r) {
+  parallelFor(Range(0, n, 256), [&](const Range& r) {
     for (std::size_t i = r.begin(); i < r.end(); ++i) {
       std::uint32_t* dst = out.indices.data() + out.offsets[i];
       std::uint32_t a = ownOff[i];
