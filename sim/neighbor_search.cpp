@@ -456,77 +456,82 @@ void NeighborSearch::buildSymmetric(const UniformGrid& grid, const std::vector<V
   const std::uint32_t* ownOff = m_own.offsets.data();
   const std::uint32_t* own = m_own.indices.data();
   const Real* h = H.data();
-  // the pairs (i, j) with H_j < H_i, to be handed to j: counted and written per chunk of points i
+  // how many larger points hand each point a pair (counts: the same whatever the order of the increments)
+  m_received.assign(n, 0);
+  std::uint32_t* received = m_received.data();
+  parallelFor(Range(0, n, 256), [&](const Range& r) {
+    for (std::size_t i = r.begin(); i < r.end(); ++i) {
+      for (std::uint32_t k = ownOff[i]; k < ownOff[i + 1]; ++k) {
+        if (h[own[k]] < h[i])
+          __atomic_fetch_add(&received[own[k]], 1u, __ATOMIC_RELAXED);
+      }
+    }
+  });
+  // i's list starts after the lists of the points before it: a prefix sum, per chunk and over chunks
   m_chunkPairs.assign(nChunks + 1, 0);
   parallelFor(Range(0, nChunks, 1), [&](const Range& cr) {
     for (std::size_t chunk = cr.begin(); chunk < cr.end(); ++chunk) {
-      std::size_t count = 0;
-      const std::size_t i1 = std::min(n, (chunk + 1) * kChunk);
-      for (std::size_t i = chunk * kChunk; i < i1; ++i) {
-        for (std::uint32_t k = ownOff[i]; k < ownOff[i + 1]; ++k)
-          count += std::size_t(h[own[k]] < h[i]);
-      }
-      m_chunkPairs[chunk + 1] = count;
+      std::size_t sum = 0;
+      for (std::size_t i = chunk * kChunk; i < std::min(n, (chunk + 1) * kChunk); ++i)
+        sum += received[i];
+      m_chunkPairs[chunk + 1] = sum;
     }
   });
   for (std::size_t chunk = 0; chunk < nChunks; ++chunk)
     m_chunkPairs[chunk + 1] += m_chunkPairs[chunk];
-  m_incoming.resize(m_chunkPairs[nChunks]);
-  parallelFor(Range(0, nChunks, 1), [&](const Range& cr) {
-    for (std::size_t chunk = cr.begin(); chunk < cr.end(); ++chunk) {
-      std::uint64_t* dst = m_incoming.data() + m_chunkPairs[chunk];
-      const std::size_t i1 = std::min(n, (chunk + 1) * kChunk);
-      for (std::size_t i = chunk * kChunk; i < i1; ++i) {
-        for (std::uint32_t k = ownOff[i]; k < ownOff[i + 1]; ++k) {
-          const std::uint32_t j = own[k];
-          if (h[j] < h[i])
-            *dst++ = (std::uint64_t(j) << 32) | std::uint64_t(i);
-        }
-      }
-    }
-  });
-  // unique keys: the same order whatever the thread count; each point's received pairs in ascending order
-  parallelSort(m_incoming.begin(), m_incoming.end());
-  // i's list starts after the own lists of the points before it and the pairs they received
   out.offsets.resize(n + 1);
-  parallelFor(Range(0, n + 1, 256), [&](const Range& r) {
-    for (std::size_t i = r.begin(); i < r.end(); ++i) {
-      const std::size_t received =
-          std::size_t(std::lower_bound(m_incoming.begin(), m_incoming.end(), std::uint64_t(i) << 32) -
-                      m_incoming.begin());
-      out.offsets[i] = std::uint32_t(ownOff[i] + received);
-    }
-  });
-  const std::size_t total = std::size_t(out.offsets[n]);
+  out.offsets[n] = std::uint32_t(ownOff[n] + m_chunkPairs[nChunks]);
+  const std::size_t total = out.offsets[n];
   if (out.indices.capacity() < total || out.indices.capacity() > 2 * (total + total / 16)) {
     std::vector<std::uint32_t> fitted;
     fitted.reserve(total + total / 16);
     out.indices.swap(fitted);
   }
   out.indices.resize(total);
-  // both parts ascending: merged, they are build()'s list
+  std::uint32_t* dst = out.indices.data();
+  // own list first; `received` becomes where i's next received pair goes
+  parallelFor(Range(0, nChunks, 1), [&](const Range& cr) {
+    for (std::size_t chunk = cr.begin(); chunk < cr.end(); ++chunk) {
+      std::size_t before = m_chunkPairs[chunk];
+      for (std::size_t i = chunk * kChunk; i < std::min(n, (chunk + 1) * kChunk); ++i) {
+        const std::uint32_t first = std::uint32_t(ownOff[i] + before);
+        out.offsets[i] = first;
+        before += received[i];
+        std::copy(own + ownOff[i], own + ownOff[i + 1], dst + first);
+        received[i] = first + (ownOff[i + 1] - ownOff[i]);
+      }
+    }
+  });
   parallelFor(Range(0, n, 256), [&](const Range& r) {
     for (std::size_t i = r.begin(); i < r.end(); ++i) {
-      std::uint32_t* dst = out.indices.data() + out.offsets[i];
-      std::uint32_t a = ownOff[i];
-      const std::uint32_t aEnd = ownOff[i + 1];
-      std::size_t b = std::size_t(out.offsets[i] - ownOff[i]);
-      const std::size_t bEnd = std::size_t(out.offsets[i + 1] - ownOff[i + 1]);
-      while (a < aEnd && b < bEnd) {
-        const std::uint32_t fromOwn = own[a];
-        const std::uint32_t fromLarger = std::uint32_t(m_incoming[b]);
-        if (fromOwn < fromLarger) {
-          *dst++ = fromOwn;
-          ++a;
-        } else {
-          *dst++ = fromLarger;
-          ++b;
-        }
+      for (std::uint32_t k = ownOff[i]; k < ownOff[i + 1]; ++k) {
+        const std::uint32_t j = own[k];
+        if (h[j] < h[i])
+          dst[__atomic_fetch_add(&received[j], 1u, __ATOMIC_RELAXED)] = std::uint32_t(i);
       }
-      while (a < aEnd)
-        *dst++ = own[a++];
-      while (b < bEnd)
-        *dst++ = std::uint32_t(m_incoming[b++]);
+    }
+  });
+  // The received pairs arrive in any order: sorted, then merged from the back with the own list (both
+  // ascending), they are build()'s list whatever the thread count.
+  parallelFor(Range(0, n, 256), [&](const Range& r) {
+    std::vector<std::uint32_t> part;
+    for (std::size_t i = r.begin(); i < r.end(); ++i) {
+      std::uint32_t* list = dst + out.offsets[i];
+      const std::size_t a = ownOff[i + 1] - ownOff[i];
+      const std::size_t size = out.offsets[i + 1] - out.offsets[i];
+      if (size == a)
+        continue;
+      part.assign(list + a, list + size);
+      std::sort(part.begin(), part.end());
+      std::size_t ia = a;
+      std::size_t ib = part.size();
+      std::size_t w = size;
+      while (ib > 0) {
+        if (ia > 0 && list[ia - 1] > part[ib - 1])
+          list[--w] = list[--ia];
+        else
+          list[--w] = part[--ib];
+      }
     }
   });
 }

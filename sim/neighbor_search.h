@@ -127,7 +127,7 @@ class NeighborSearch {
       bytes += c.capacity() * sizeof(Real);
     for (const std::vector<Real>& c : m_windowMaxH)
       bytes += c.capacity() * sizeof(Real);
-    return bytes + m_own.memoryBytes() + m_incoming.capacity() * sizeof(std::uint64_t) +
+    return bytes + m_own.memoryBytes() + m_received.capacity() * sizeof(std::uint32_t) +
            m_chunkPairs.capacity() * sizeof(std::size_t);
   }
 
@@ -144,9 +144,9 @@ class NeighborSearch {
   std::vector<std::vector<Real>> m_windowMaxH;
   // buildSymmetric: each point's neighbours no larger than itself
   NeighborList m_own;
-  // buildSymmetric: the pairs (j, i) with H_j < H_i of the own lists, as j << 32 | i, sorted
-  std::vector<std::uint64_t> m_incoming;
-  // buildSymmetric: where each chunk of points writes its pairs into m_incoming
+  // buildSymmetric: pairs each point receives from larger points, then where the next one goes
+  std::vector<std::uint32_t> m_received;
+  // buildSymmetric: pairs received by the points of the chunks before each chunk
   std::vector<std::size_t> m_chunkPairs;
 };
 
