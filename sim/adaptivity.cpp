@@ -341,9 +341,12 @@ AdaptivityStats Adaptivity::adapt(const AdaptContext& ctx, bool ignoreDelay) {
     }
   }
 
-  // share: a heavy particle gives half its excess to light neighbours
+  // share: a heavy particle gives half its excess to light neighbours, once its mass leaves the band of the
+  // target hysteresis (target_band): within it the particle is as close to its target as the target is to
+  // the levels, and sharing would only churn water at rest
+  const Real shareAbove = Real(std::max(params.shareAbove, 1.0 + params.targetBand));
   for (std::size_t i = 0; i < n; ++i) {
-    if (m_locked[i] || ratio(i) < Real(params.shareAbove))
+    if (m_locked[i] || ratio(i) < shareAbove)
       continue;
     if (transferMass(ctx, i, 0.5 * (double(p.m[i]) - double(p.mOpt[i])), false))
       ++stats.redistributions;

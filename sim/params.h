@@ -52,6 +52,7 @@ struct SimParams {
   double velocityDifferenceHi;
   double velocityDifferenceRmax;
   double massSmoothing;
+  double targetBand;
   int adaptationPeriod;
   int levelsPeriod;
   bool cflLimitedRefinement;
