@@ -7,8 +7,6 @@
 /// Between frames the simulation is idle: finishSteps() joins the task, then the caller reads the state,
 /// applies its edits and starts the next frame's steps with startSteps().
 
-#include <tbb/task_group.h>
-
 #include <array>
 #include <atomic>
 #include <chrono>
@@ -26,6 +24,7 @@
 #include "input/joint_hand.h"
 #include "input/mouse_hand.h"
 #include "input/pose_track.h"
+#include "sim/parallel.h"
 #include "sim/simulation.h"
 
 namespace fp::engine {
@@ -283,7 +282,7 @@ class AppSession {
   };
   std::vector<TrackedHand> m_tracked;
 
-  tbb::task_group m_task;
+  sim::TaskGroup m_task;
   std::thread m_thread;                 // the steps' thread (SessionConfig::stepThread)
   std::atomic<bool> m_stepsDone{true};  // set by the steps when they finish
   int m_slowStepsDone = 0;              // written by the steps (SessionConfig::slowSteps)

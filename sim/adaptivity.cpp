@@ -1,12 +1,11 @@
 #include "sim/adaptivity.h"
 
-#include <tbb/parallel_for.h>
-
 #include <algorithm>
 #include <cmath>
 
 #include "sim/kernels.h"
 #include "sim/levels.h"
+#include "sim/parallel.h"
 #include "sim/signed_distance.h"
 #include "sim/split_templates.h"
 
@@ -270,11 +269,10 @@ AdaptivityStats Adaptivity::adapt(const AdaptContext& ctx, bool ignoreDelay) {
   auto ratio = [&](std::size_t i) { return p.m[i] / p.mOpt[i]; };
   // the split delay counts solver steps, whatever the adaptation period
   const std::uint32_t period = std::uint32_t(std::max(1, params.adaptationPeriod));
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096),
-                    [&](const tbb::blocked_range<std::size_t>& r) {
-                      for (std::size_t i = r.begin(); i < r.end(); ++i)
-                        p.heavySteps[i] = ratio(i) >= Real(params.splitAbove) ? p.heavySteps[i] + period : 0;
-                    });
+  parallelFor(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t i = r.begin(); i < r.end(); ++i)
+      p.heavySteps[i] = ratio(i) >= Real(params.splitAbove) ? p.heavySteps[i] + period : 0;
+  });
 
   // merge n:(n-1): a too-light particle goes into its nearest light neighbours
   for (std::size_t i = 0; i < n; ++i) {
@@ -294,11 +292,11 @@ AdaptivityStats Adaptivity::adapt(const AdaptContext& ctx, bool ignoreDelay) {
     plan.n = childCount(ratio(i), params);
     m_plans.push_back(plan);
   }
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m_plans.size(), 4),
-                    [&](const tbb::blocked_range<std::size_t>& r) {
-                      for (std::size_t k = r.begin(); k < r.end(); ++k)
-                        planSplit(ctx, m_plans[k]);
-                    });
+  parallelFor(tbb::blocked_range<std::size_t>(0, m_plans.size(), 4),
+              [&](const tbb::blocked_range<std::size_t>& r) {
+                for (std::size_t k = r.begin(); k < r.end(); ++k)
+                  planSplit(ctx, m_plans[k]);
+              });
   for (const SplitPlan& plan : m_plans) {
     if (plan.chosen < 0) {
       ++stats.splitsBlocked;
@@ -366,16 +364,16 @@ AdaptivityStats Adaptivity::adapt(const AdaptContext& ctx, bool ignoreDelay) {
 void Adaptivity::blendSupports(ParticleSet& p, const SimParams& params, Real mFine) {
   const Real r = Real(params.particleRadius);
   const Real keep = params.supportBlendSteps > 0 ? Real(std::exp(-3.0 / params.supportBlendSteps)) : Real(0);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, p.size(), 4096),
-                    [&](const tbb::blocked_range<std::size_t>& rg) {
-                      for (std::size_t i = rg.begin(); i < rg.end(); ++i) {
-                        const Real target = supportForMass(p.m[i], mFine, r);
-                        Real h = target + (p.H[i] - target) * keep;
-                        if (std::abs(h - target) < Real(1e-3) * target)
-                          h = target;
-                        p.H[i] = h;
-                      }
-                    });
+  parallelFor(tbb::blocked_range<std::size_t>(0, p.size(), 4096),
+              [&](const tbb::blocked_range<std::size_t>& rg) {
+                for (std::size_t i = rg.begin(); i < rg.end(); ++i) {
+                  const Real target = supportForMass(p.m[i], mFine, r);
+                  Real h = target + (p.H[i] - target) * keep;
+                  if (std::abs(h - target) < Real(1e-3) * target)
+                    h = target;
+                  p.H[i] = h;
+                }
+              });
 }
 
 namespace {
@@ -442,64 +440,62 @@ void Adaptivity::blendSplitDensities(ParticleSet& p, const NeighborList& fluidNb
   const Real r = Real(params.particleRadius);
   const Real Hb = boundary.support();
   const std::size_t groups = g.start.size() - 1;
-  tbb::parallel_for(
-      tbb::blocked_range<std::size_t>(0, groups, 8), [&](const tbb::blocked_range<std::size_t>& rg) {
-        std::vector<std::uint32_t> members, fluid, walls;
-        for (std::size_t k = rg.begin(); k < rg.end(); ++k) {
-          members.assign(g.index.begin() + g.start[k], g.index.begin() + g.start[k + 1]);
-          std::sort(members.begin(), members.end());
-          double mass = 0.0;
-          Vec3d centre = Vec3d::Zero();
-          fluid.clear();
-          walls.clear();
-          for (std::uint32_t s : members) {
-            mass += double(p.m[s]);
-            centre += double(p.m[s]) * p.x[s].cast<double>();
-            for (std::uint32_t q = fluidNbrs.offsets[s]; q < fluidNbrs.offsets[s + 1]; ++q)
-              fluid.push_back(fluidNbrs.indices[q]);
-            for (std::uint32_t q = boundaryNbrs.offsets[s]; q < boundaryNbrs.offsets[s + 1]; ++q)
-              walls.push_back(boundaryNbrs.indices[q]);
-          }
-          centre /= mass;
-          for (std::vector<std::uint32_t>* list : {&fluid, &walls}) {
-            std::sort(list->begin(), list->end());
-            list->erase(std::unique(list->begin(), list->end()), list->end());
-          }
-          // the parent: its mass and the support of that mass, at the siblings' centre of mass
-          const Real Ho = supportForMass(Real(mass), mFine, r);
-          const Vec3 xo = centre.cast<Real>();
-          double density = mass / rho0 * double(CubicSpline::w0(Ho));
-          for (std::uint32_t j : fluid) {
-            if (std::binary_search(members.begin(), members.end(), j))
-              continue;
-            density +=
-                double(p.m[j]) / rho0 * double(CubicSpline::w((xo - p.x[j]).norm(), pairSupport(Ho, p.H[j])));
-          }
-          const Real Hob = pairSupport(Ho, Hb);
-          const double sb = double(boundary.volumeScale(Ho));
-          for (std::uint32_t b : walls)
-            density +=
-                sb * double(boundary.psi[b]) * double(CubicSpline::w((xo - boundary.x[b]).norm(), Hob));
-          const double rhoParent = density * rho0;
-          for (std::uint32_t s : members) {
-            const double beta = double(splitBlendWeight(p.splitAge[s], params.splitBlendSteps));
-            p.rho[s] = Real(double(p.rho[s]) + beta * (rhoParent - double(p.rho[s])));
-          }
-        }
-      });
+  parallelFor(tbb::blocked_range<std::size_t>(0, groups, 8), [&](const tbb::blocked_range<std::size_t>& rg) {
+    std::vector<std::uint32_t> members, fluid, walls;
+    for (std::size_t k = rg.begin(); k < rg.end(); ++k) {
+      members.assign(g.index.begin() + g.start[k], g.index.begin() + g.start[k + 1]);
+      std::sort(members.begin(), members.end());
+      double mass = 0.0;
+      Vec3d centre = Vec3d::Zero();
+      fluid.clear();
+      walls.clear();
+      for (std::uint32_t s : members) {
+        mass += double(p.m[s]);
+        centre += double(p.m[s]) * p.x[s].cast<double>();
+        for (std::uint32_t q = fluidNbrs.offsets[s]; q < fluidNbrs.offsets[s + 1]; ++q)
+          fluid.push_back(fluidNbrs.indices[q]);
+        for (std::uint32_t q = boundaryNbrs.offsets[s]; q < boundaryNbrs.offsets[s + 1]; ++q)
+          walls.push_back(boundaryNbrs.indices[q]);
+      }
+      centre /= mass;
+      for (std::vector<std::uint32_t>* list : {&fluid, &walls}) {
+        std::sort(list->begin(), list->end());
+        list->erase(std::unique(list->begin(), list->end()), list->end());
+      }
+      // the parent: its mass and the support of that mass, at the siblings' centre of mass
+      const Real Ho = supportForMass(Real(mass), mFine, r);
+      const Vec3 xo = centre.cast<Real>();
+      double density = mass / rho0 * double(CubicSpline::w0(Ho));
+      for (std::uint32_t j : fluid) {
+        if (std::binary_search(members.begin(), members.end(), j))
+          continue;
+        density +=
+            double(p.m[j]) / rho0 * double(CubicSpline::w((xo - p.x[j]).norm(), pairSupport(Ho, p.H[j])));
+      }
+      const Real Hob = pairSupport(Ho, Hb);
+      const double sb = double(boundary.volumeScale(Ho));
+      for (std::uint32_t b : walls)
+        density += sb * double(boundary.psi[b]) * double(CubicSpline::w((xo - boundary.x[b]).norm(), Hob));
+      const double rhoParent = density * rho0;
+      for (std::uint32_t s : members) {
+        const double beta = double(splitBlendWeight(p.splitAge[s], params.splitBlendSteps));
+        p.rho[s] = Real(double(p.rho[s]) + beta * (rhoParent - double(p.rho[s])));
+      }
+    }
+  });
 }
 
 void Adaptivity::ageSplitChildren(ParticleSet& p, const SimParams& params) {
   const std::uint32_t steps = std::uint32_t(std::max(0, params.splitBlendSteps));
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, p.size(), 4096),
-                    [&](const tbb::blocked_range<std::size_t>& rg) {
-                      for (std::size_t i = rg.begin(); i < rg.end(); ++i) {
-                        if (p.parentId[i] == kNoParent)
-                          continue;
-                        if (++p.splitAge[i] >= steps)
-                          p.parentId[i] = kNoParent;
-                      }
-                    });
+  parallelFor(tbb::blocked_range<std::size_t>(0, p.size(), 4096),
+              [&](const tbb::blocked_range<std::size_t>& rg) {
+                for (std::size_t i = rg.begin(); i < rg.end(); ++i) {
+                  if (p.parentId[i] == kNoParent)
+                    continue;
+                  if (++p.splitAge[i] >= steps)
+                    p.parentId[i] = kNoParent;
+                }
+              });
 }
 
 std::size_t Adaptivity::memoryBytes() const {

@@ -1,11 +1,10 @@
 #include "sim/boundary_set.h"
 
-#include <tbb/parallel_for.h>
-
 #include <unordered_map>
 
 #include "sim/boundary_sampling.h"
 #include "sim/kernels.h"
+#include "sim/parallel.h"
 
 namespace fp::sim {
 
@@ -23,7 +22,7 @@ void computeVolumes(const std::vector<Vec3>& x, std::size_t begin, std::size_t e
   cells.reserve(end - begin);
   for (std::size_t i = begin; i < end; ++i)
     cells.emplace(key(x[i]), std::uint32_t(i));
-  tbb::parallel_for(
+  parallelFor(
       tbb::blocked_range<std::size_t>(begin, end, 256), [&](const tbb::blocked_range<std::size_t>& r) {
         for (std::size_t i = r.begin(); i < r.end(); ++i) {
           Real sum = 0;
@@ -79,15 +78,15 @@ void BoundarySet::build(const std::vector<ColliderState>& colliders, Real partic
 
 void BoundarySet::updateKinematic(const std::vector<ColliderState>& colliders) {
   const std::size_t n = x.size();
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(m_staticCount, n, 1024),
-                    [&](const tbb::blocked_range<std::size_t>& r) {
-                      for (std::size_t i = r.begin(); i < r.end(); ++i) {
-                        const ColliderState& c = colliders[collider[i]];
-                        const Vec3d arm = c.orientation * local[i];
-                        x[i] = (arm + c.position).cast<Real>();
-                        v[i] = (c.linearVelocity + c.angularVelocity.cross(arm)).cast<Real>();
-                      }
-                    });
+  parallelFor(tbb::blocked_range<std::size_t>(m_staticCount, n, 1024),
+              [&](const tbb::blocked_range<std::size_t>& r) {
+                for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                  const ColliderState& c = colliders[collider[i]];
+                  const Vec3d arm = c.orientation * local[i];
+                  x[i] = (arm + c.position).cast<Real>();
+                  v[i] = (c.linearVelocity + c.angularVelocity.cross(arm)).cast<Real>();
+                }
+              });
 }
 
 void BoundarySet::permute(std::size_t begin, const std::vector<std::uint32_t>& order) {

@@ -1,13 +1,11 @@
 #include "sim/dfsph_solver.h"
 
-#include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
-
 #include <algorithm>
 #include <cmath>
 #include <limits>
 
 #include "sim/kernels.h"
+#include "sim/parallel.h"
 
 namespace fp::sim {
 
@@ -23,7 +21,7 @@ using Range = tbb::blocked_range<std::size_t>;
 /// Deterministic parallel sum of f(i) over [0, n).
 template <class T, class F>
 T deterministicSum(std::size_t n, T zero, F&& f) {
-  return tbb::parallel_deterministic_reduce(
+  return parallelDeterministicReduce(
       Range(0, n, kGrain), zero,
       [&](const Range& r, T acc) {
         for (std::size_t i = r.begin(); i < r.end(); ++i)
@@ -213,7 +211,7 @@ SolveResult DfsphSolver::divergenceSolve(SolverContext& ctx, Real dt) {
   const Real invDt = Real(1) / dt;
   // the density pass left the rate of the current velocities in m_rate
   if (ctx.params.warmStart) {
-    tbb::parallel_for(Range(0, n, kGrain), [&](const Range& r) {
+    parallelFor(Range(0, n, kGrain), [&](const Range& r) {
       for (std::size_t i = r.begin(); i < r.end(); ++i) {
         m_k[i] = clampRate(i, m_rate[i]) > 0 ? Real(0.5) * kv[i] * invDt : Real(0);
         kv[i] = 0;
@@ -249,7 +247,7 @@ SolveResult DfsphSolver::divergenceSolve(SolverContext& ctx, Real dt) {
     ++result.iterations;
   }
   // stored per unit time step so that the warm start survives a change of dt
-  tbb::parallel_for(Range(0, n, kGrain), [&](const Range& r) {
+  parallelFor(Range(0, n, kGrain), [&](const Range& r) {
     for (std::size_t i = r.begin(); i < r.end(); ++i)
       kv[i] *= dt;
   });
@@ -327,7 +325,7 @@ void DfsphSolver::nonPressureForces(SolverContext& ctx, Real dtPrevious) {
   if (gamma > 0) {
     // Akinci 2013 normals n_i = H_i sum_j m_j / rho_j grad W_ij
     m_normal.resize(n);
-    tbb::parallel_for(Range(0, n, kGrain), [&](const Range& r) {
+    parallelFor(Range(0, n, kGrain), [&](const Range& r) {
       for (std::size_t i = r.begin(); i < r.end(); ++i) {
         Vec3 nrm = Vec3::Zero();
         for (std::uint32_t q = fo[i]; q < fo[i + 1]; ++q) {
@@ -382,7 +380,7 @@ Real DfsphSolver::cflTimeStep(const SolverContext& ctx, Real dtPrevious) const {
   const ParticleSet& p = ctx.fluid;
   const std::size_t n = p.size();
   // min over particles of (2 r_i) / |v_i + a_i dt|, with 2 r_i = H_i / 2; min is exact in any order
-  const Real limit = tbb::parallel_reduce(
+  const Real limit = parallelReduce(
       Range(0, n, kGrain), std::numeric_limits<Real>::max(),
       [&](const Range& r, Real acc) {
         for (std::size_t i = r.begin(); i < r.end(); ++i) {
@@ -396,7 +394,7 @@ Real DfsphSolver::cflTimeStep(const SolverContext& ctx, Real dtPrevious) const {
   // Moving colliders too (as the reference does for animated boundaries): a hand at 2.5 m/s crosses its
   // single layer of boundary particles in less than a 5 ms step, and the water leaks through it.
   const BoundarySet& b = ctx.boundary;
-  const Real wallLimit = tbb::parallel_reduce(
+  const Real wallLimit = parallelReduce(
       Range(b.staticCount(), b.size(), kGrain), std::numeric_limits<Real>::max(),
       [&](const Range& r, Real acc) {
         for (std::size_t k = r.begin(); k < r.end(); ++k) {
@@ -413,7 +411,7 @@ Real DfsphSolver::cflTimeStep(const SolverContext& ctx, Real dtPrevious) const {
 
 void DfsphSolver::integrateVelocities(SolverContext& ctx, Real dt) {
   ParticleSet& p = ctx.fluid;
-  tbb::parallel_for(Range(0, p.size(), kGrain), [&](const Range& r) {
+  parallelFor(Range(0, p.size(), kGrain), [&](const Range& r) {
     for (std::size_t i = r.begin(); i < r.end(); ++i)
       p.v[i] += dt * p.a[i];
   });

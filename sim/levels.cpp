@@ -1,13 +1,11 @@
 #include "sim/levels.h"
 
-#include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
-
 #include <algorithm>
 #include <atomic>
 #include <cmath>
 
 #include "sim/kernels.h"
+#include "sim/parallel.h"
 
 namespace fp::sim {
 
@@ -116,7 +114,7 @@ void setSurfaceFlag(ParticleSet& p, std::size_t i, bool surface) {
 void detectSurface(ParticleSet& p, const NeighborList& fluidNbrs, const NeighborList& boundaryNbrs,
                    const BoundarySet& boundary) {
   const std::size_t n = p.size();
-  tbb::parallel_for(Range(0, n, kGrain), [&](const Range& r) {
+  parallelFor(Range(0, n, kGrain), [&](const Range& r) {
     for (std::size_t i = r.begin(); i < r.end(); ++i) {
       const Vec3 xi = p.x[i];
       // Directions to the neighbours weighted by their volumes: with particles of different sizes an
@@ -144,7 +142,7 @@ void LevelEstimator::surfaceAndRawDynamics(ParticleSet& p, const NeighborList& f
   const std::size_t n = p.size();
   m_rawOmega.resize(n);
   m_rawNu.resize(n);
-  tbb::parallel_for(Range(0, n, kGrain), [&](const Range& r) {
+  parallelFor(Range(0, n, kGrain), [&](const Range& r) {
     for (std::size_t i = r.begin(); i < r.end(); ++i) {
       const Vec3 xi = p.x[i];
       const Vec3 vi = p.v[i];
@@ -188,7 +186,7 @@ void LevelEstimator::startDistance(ParticleSet& p, Real cap, Real hop, int& pass
   const std::size_t n = p.size();
   m_phiNext.resize(n);
   std::atomic<bool> fresh{false};
-  tbb::parallel_for(Range(0, n, kGrain), [&](const Range& r) {
+  parallelFor(Range(0, n, kGrain), [&](const Range& r) {
     bool local = false;
     for (std::size_t i = r.begin(); i < r.end(); ++i) {
       if (p.flags[i] & kFlagSurface) {
@@ -222,7 +220,7 @@ bool LevelEstimator::distancePass(ParticleSet& p, const NeighborList& fluidNbrs,
                                   bool smoothDynamics) {
   const std::size_t n = p.size();
   std::atomic<bool> changed{false};
-  tbb::parallel_for(Range(0, n, kGrain), [&](const Range& r) {
+  parallelFor(Range(0, n, kGrain), [&](const Range& r) {
     bool local = false;
     for (std::size_t i = r.begin(); i < r.end(); ++i) {
       const Real best = distanceAt(p, i, fluidNbrs, cap);
@@ -291,7 +289,7 @@ void LevelEstimator::compute(ParticleSet& p, const NeighborList& fluidNbrs, cons
   double surfaceSpeed2 = 0.0;
   if (cflLimit) {
     // a maximum: exact in any order
-    surfaceSpeed2 = tbb::parallel_reduce(
+    surfaceSpeed2 = parallelReduce(
         Range(0, n, kGrain), 0.0,
         [&](const Range& rg, double acc) {
           for (std::size_t i = rg.begin(); i < rg.end(); ++i) {
@@ -309,7 +307,7 @@ void LevelEstimator::compute(ParticleSet& p, const NeighborList& fluidNbrs, cons
   const double dtTarget =
       surfaceSpeed2 > 0.0 ? std::min(params.dtMax, fineLimit / std::sqrt(surfaceSpeed2)) : params.dtMax;
   target.resize(n);
-  tbb::parallel_for(Range(0, n, kGrain), [&](const Range& rg) {
+  parallelFor(Range(0, n, kGrain), [&](const Range& rg) {
     for (std::size_t i = rg.begin(); i < rg.end(); ++i) {
       const double rPhi = visibleLevel(p.phi[i], lo, hi);
       double rOmega = 1.0;

@@ -1,14 +1,12 @@
 #include "sim/neighbor_search.h"
 
-#include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
-#include <tbb/parallel_sort.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
 #include <sstream>
+
+#include "sim/parallel.h"
 
 namespace fp::sim {
 
@@ -55,7 +53,7 @@ void UniformGrid::sort(const Vec3* x, std::size_t n, std::vector<std::uint32_t>&
   const std::uint32_t nx = std::uint32_t(m_dims.x());
   const std::size_t nRows = std::size_t(m_dims.y()) * std::size_t(m_dims.z());
   m_keys.resize(n);
-  tbb::parallel_for(Range(0, n, 4096), [&](const Range& r) {
+  parallelFor(Range(0, n, 4096), [&](const Range& r) {
     for (std::size_t i = r.begin(); i < r.end(); ++i) {
       const Eigen::Vector3i c = cellCoord(x[i]);
       m_keys[i] = (std::uint64_t(linear(c.x(), c.y(), c.z())) << 32) | std::uint64_t(i);
@@ -63,17 +61,17 @@ void UniformGrid::sort(const Vec3* x, std::size_t n, std::vector<std::uint32_t>&
   });
   // the keys are unique, so the sorted order is the same whatever the thread count (and the same as a stable
   // counting sort's); the particles come in nearly sorted from the last step
-  tbb::parallel_sort(m_keys.begin(), m_keys.end());
+  parallelSort(m_keys.begin(), m_keys.end());
   order.resize(n);
   // the first sorted point of every row (rows are runs of nx cells), by bisection
   m_rowFirst.resize(nRows + 1);
-  tbb::parallel_for(Range(0, nRows + 1, 256), [&](const Range& r) {
+  parallelFor(Range(0, nRows + 1, 256), [&](const Range& r) {
     for (std::size_t row = r.begin(); row < r.end(); ++row) {
       const std::uint64_t key = std::uint64_t(row) * nx << 32;
       m_rowFirst[row] = std::uint32_t(std::lower_bound(m_keys.begin(), m_keys.end(), key) - m_keys.begin());
     }
   });
-  tbb::parallel_for(Range(0, n, 4096), [&](const Range& r) {
+  parallelFor(Range(0, n, 4096), [&](const Range& r) {
     for (std::size_t k = r.begin(); k < r.end(); ++k)
       order[k] = std::uint32_t(m_keys[k]);
   });
@@ -91,7 +89,7 @@ void UniformGrid::sort(const Vec3* x, std::size_t n, std::vector<std::uint32_t>&
   cells[0] = std::uint32_t(n);
   cells[1] = std::uint32_t(nRows);
   cells.resize(pos);
-  tbb::parallel_for(Range(0, nRows, 64), [&](const Range& r) {
+  parallelFor(Range(0, nRows, 64), [&](const Range& r) {
     for (std::size_t row = r.begin(); row < r.end(); ++row) {
       const std::uint32_t off = cells[2 + row];
       if (off == 0)
@@ -168,7 +166,7 @@ void NeighborSearch::build(const UniformGrid& grid, const std::vector<Vec3>& qx,
     const std::size_t count = CellRanges(*sources[s].cellStart).count();
     const Vec3* sx = sources[s].x;
     using Box = Eigen::AlignedBox<Real, 3>;
-    Box box = tbb::parallel_reduce(
+    Box box = parallelReduce(
         tbb::blocked_range<std::size_t>(0, count, 4096), Box(),
         [&](const tbb::blocked_range<std::size_t>& r, Box acc) {
           for (std::size_t j = r.begin(); j < r.end(); ++j)
@@ -204,29 +202,28 @@ void NeighborSearch::build(const UniformGrid& grid, const std::vector<Vec3>& qx,
     // reach that hold only fine particles. The largest within `windowReach` cells along x of each cell: a
     // whole row of the reach is then skipped with one load when none of its points can be a neighbour (the
     // far rows of a fine particle's reach). The lists come out the same, in the same order.
-    tbb::parallel_for(
-        tbb::blocked_range<std::size_t>(0, nRows, 64), [&](const tbb::blocked_range<std::size_t>& r) {
-          for (std::size_t row = r.begin(); row < r.end(); ++row) {
-            const std::uint32_t off = ranges.rowOffset(std::uint32_t(row));
-            if (off == 0)
-              continue;
-            const std::uint32_t* start = ranges.data() + off;
-            Real* cm = cellMax.data() + off;
-            Real* wm = window.data() + off;
-            for (int cx = 0; cx < nx; ++cx) {
-              Real h = 0;
-              for (std::uint32_t j = start[cx]; j < start[cx + 1]; ++j)
-                h = std::max(h, sH[j]);
-              cm[cx] = h;
-            }
-            for (int cx = 0; cx < nx; ++cx) {
-              Real h = 0;
-              for (int k = std::max(0, cx - windowReach); k <= std::min(nx - 1, cx + windowReach); ++k)
-                h = std::max(h, cm[k]);
-              wm[cx] = h;
-            }
-          }
-        });
+    parallelFor(tbb::blocked_range<std::size_t>(0, nRows, 64), [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t row = r.begin(); row < r.end(); ++row) {
+        const std::uint32_t off = ranges.rowOffset(std::uint32_t(row));
+        if (off == 0)
+          continue;
+        const std::uint32_t* start = ranges.data() + off;
+        Real* cm = cellMax.data() + off;
+        Real* wm = window.data() + off;
+        for (int cx = 0; cx < nx; ++cx) {
+          Real h = 0;
+          for (std::uint32_t j = start[cx]; j < start[cx + 1]; ++j)
+            h = std::max(h, sH[j]);
+          cm[cx] = h;
+        }
+        for (int cx = 0; cx < nx; ++cx) {
+          Real h = 0;
+          for (int k = std::max(0, cx - windowReach); k <= std::min(nx - 1, cx + windowReach); ++k)
+            h = std::max(h, cm[k]);
+          wm[cx] = h;
+        }
+      }
+    });
   }
   auto searchChunk = [&](std::size_t chunk) {
     const std::size_t room = roomStart[chunk + 1] - roomStart[chunk];
@@ -375,11 +372,10 @@ void NeighborSearch::build(const UniformGrid& grid, const std::vector<Vec3>& qx,
   if (out.indices.capacity() < total)
     out.indices.reserve(total + total / 16);
   out.indices.resize(total);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nChunks, 1),
-                    [&](const tbb::blocked_range<std::size_t>& cr) {
-                      for (std::size_t chunk = cr.begin(); chunk < cr.end(); ++chunk)
-                        searchChunk(chunk);
-                    });
+  parallelFor(tbb::blocked_range<std::size_t>(0, nChunks, 1), [&](const tbb::blocked_range<std::size_t>& cr) {
+    for (std::size_t chunk = cr.begin(); chunk < cr.end(); ++chunk)
+      searchChunk(chunk);
+  });
   std::vector<std::size_t> listStart(nChunks + 1, 0);
   for (std::size_t chunk = 0; chunk < nChunks; ++chunk)
     listStart[chunk + 1] = listStart[chunk] + out.chunkCounts[chunk];
@@ -397,17 +393,17 @@ void NeighborSearch::build(const UniformGrid& grid, const std::vector<Vec3>& qx,
     // some chunk outgrew its room (lists grew, or adaptivity moved coarse particles into it): gather into
     // a new array
     std::vector<std::uint32_t> merged(listStart[nChunks]);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nChunks, 1),
-                      [&](const tbb::blocked_range<std::size_t>& cr) {
-                        for (std::size_t chunk = cr.begin(); chunk < cr.end(); ++chunk) {
-                          const std::size_t room = roomStart[chunk + 1] - roomStart[chunk];
-                          const std::size_t inRoom = std::min<std::size_t>(room, out.chunkCounts[chunk]);
-                          const auto from = out.indices.begin() + std::ptrdiff_t(roomStart[chunk]);
-                          const auto to = std::copy(from, from + std::ptrdiff_t(inRoom),
-                                                    merged.begin() + std::ptrdiff_t(listStart[chunk]));
-                          std::copy(spills[chunk].begin(), spills[chunk].end(), to);
-                        }
-                      });
+    parallelFor(tbb::blocked_range<std::size_t>(0, nChunks, 1),
+                [&](const tbb::blocked_range<std::size_t>& cr) {
+                  for (std::size_t chunk = cr.begin(); chunk < cr.end(); ++chunk) {
+                    const std::size_t room = roomStart[chunk + 1] - roomStart[chunk];
+                    const std::size_t inRoom = std::min<std::size_t>(room, out.chunkCounts[chunk]);
+                    const auto from = out.indices.begin() + std::ptrdiff_t(roomStart[chunk]);
+                    const auto to = std::copy(from, from + std::ptrdiff_t(inRoom),
+                                              merged.begin() + std::ptrdiff_t(listStart[chunk]));
+                    std::copy(spills[chunk].begin(), spills[chunk].end(), to);
+                  }
+                });
     out.indices.swap(merged);
   }
   // The first build's rooms are a guess (32 a query point, where walls give a handful), and lists shrink when
@@ -420,15 +416,14 @@ void NeighborSearch::build(const UniformGrid& grid, const std::vector<Vec3>& qx,
     fitted.assign(out.indices.begin(), out.indices.end());
     out.indices.swap(fitted);
   }
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nChunks, 1),
-                    [&](const tbb::blocked_range<std::size_t>& cr) {
-                      for (std::size_t chunk = cr.begin(); chunk < cr.end(); ++chunk) {
-                        const std::uint32_t base = std::uint32_t(listStart[chunk]);
-                        const std::size_t i1 = std::min(n, (chunk + 1) * kChunk);
-                        for (std::size_t i = chunk * kChunk; i < i1; ++i)
-                          out.offsets[i + 1] += base;
-                      }
-                    });
+  parallelFor(tbb::blocked_range<std::size_t>(0, nChunks, 1), [&](const tbb::blocked_range<std::size_t>& cr) {
+    for (std::size_t chunk = cr.begin(); chunk < cr.end(); ++chunk) {
+      const std::uint32_t base = std::uint32_t(listStart[chunk]);
+      const std::size_t i1 = std::min(n, (chunk + 1) * kChunk);
+      for (std::size_t i = chunk * kChunk; i < i1; ++i)
+        out.offsets[i + 1] += base;
+    }
+  });
 }
 
 }  // namespace fp::sim

@@ -1,8 +1,8 @@
 #include "sim/particle_set.h"
 
-#include <tbb/parallel_for.h>
-
 #include <limits>
+
+#include "sim/parallel.h"
 
 namespace fp::sim {
 
@@ -77,11 +77,10 @@ void ParticleSet::permute(const std::vector<std::uint32_t>& order) {
   const std::size_t n = order.size();
   forEachField([&](auto& field, auto& scratch) {
     scratch.resize(n);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096),
-                      [&](const tbb::blocked_range<std::size_t>& r) {
-                        for (std::size_t k = r.begin(); k < r.end(); ++k)
-                          scratch[k] = field[order[k]];
-                      });
+    parallelFor(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t k = r.begin(); k < r.end(); ++k)
+        scratch[k] = field[order[k]];
+    });
     field.swap(scratch);
   });
 }

@@ -1,8 +1,6 @@
 #include "sim/simulation.h"
 
 #include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <cmath>
@@ -10,6 +8,7 @@
 #include <sstream>
 
 #include "sim/kernels.h"
+#include "sim/parallel.h"
 #include "sim/signed_distance.h"
 
 namespace fp::sim {
@@ -327,13 +326,13 @@ void Simulation::computeLevels(bool smooth) {
   // levels computed every k solver steps move the target as far as k steps of smoothing would
   const int k = std::max(1, m_params.adaptationPeriod) * std::max(1, m_params.levelsPeriod);
   const Real gamma = smooth ? Real(1.0 - std::pow(1.0 - m_params.massSmoothing, k)) : Real(1);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m_fluid.size(), 4096),
-                    [&](const tbb::blocked_range<std::size_t>& r) {
-                      for (std::size_t i = r.begin(); i < r.end(); ++i) {
-                        const Real m = m_fluid.mOpt[i] + gamma * (m_target[i] - m_fluid.mOpt[i]);
-                        m_fluid.mOpt[i] = std::clamp(m, mFine, std::max(mFine, mBase));
-                      }
-                    });
+  parallelFor(tbb::blocked_range<std::size_t>(0, m_fluid.size(), 4096),
+              [&](const tbb::blocked_range<std::size_t>& r) {
+                for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                  const Real m = m_fluid.mOpt[i] + gamma * (m_target[i] - m_fluid.mOpt[i]);
+                  m_fluid.mOpt[i] = std::clamp(m, mFine, std::max(mFine, mBase));
+                }
+              });
 }
 
 AdaptivityStats Simulation::adaptResolution(bool ignoreDelay) {
@@ -384,7 +383,7 @@ void Simulation::searchNeighbors() {
   }
   using Range = tbb::blocked_range<std::size_t>;
   using MinMax = std::pair<Real, Real>;
-  const MinMax hRange = tbb::parallel_reduce(
+  const MinMax hRange = parallelReduce(
       Range(0, m_fluid.size(), 4096), MinMax(std::numeric_limits<Real>::max(), Real(0)),
       [&](const Range& r, MinMax acc) {
         for (std::size_t i = r.begin(); i < r.end(); ++i) {
@@ -414,7 +413,7 @@ void Simulation::integrateAndCheck(Real dt) {
   const Vec3 lo = m_scene.domain.min().cast<Real>();
   const Vec3 hi = m_scene.domain.max().cast<Real>();
   // advance and find the first bad particle (lowest index, so the report is deterministic)
-  const std::size_t bad = tbb::parallel_reduce(
+  const std::size_t bad = parallelReduce(
       tbb::blocked_range<std::size_t>(0, n, 4096), n,
       [&](const tbb::blocked_range<std::size_t>& r, std::size_t first) {
         for (std::size_t i = r.begin(); i < r.end(); ++i) {
@@ -496,20 +495,20 @@ void Simulation::reactOnHeld(Real dt) {
   // stiffness the density solve applied in this step, kappaV the divergence solve's times its step.)
   const ParticleSet& p = m_fluid;
   const Real invRho0 = Real(1) / Real(m_params.restDensity);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, m_held.size(), 256),
-                    [&](const tbb::blocked_range<std::size_t>& r) {
-                      for (std::size_t k = r.begin(); k < r.end(); ++k) {
-                        const std::uint32_t j = m_held[k];
-                        Vec3 dv = Vec3::Zero();
-                        for (std::uint32_t q = m_heldNbrs.offsets[k]; q < m_heldNbrs.offsets[k + 1]; ++q) {
-                          const std::uint32_t i = m_heldNbrs.indices[q];
-                          const Vec3 xij = p.x[i] - p.x[j];
-                          const Real g = CubicSpline::gradFactor(xij.norm(), pairSupport(p.H[i], p.H[j]));
-                          dv += (p.m[i] * invRho0 * (dt * p.kappa[i] + p.kappaV[i]) * g) * xij;
-                        }
-                        m_fluid.v[j] += dv;
-                      }
-                    });
+  parallelFor(tbb::blocked_range<std::size_t>(0, m_held.size(), 256),
+              [&](const tbb::blocked_range<std::size_t>& r) {
+                for (std::size_t k = r.begin(); k < r.end(); ++k) {
+                  const std::uint32_t j = m_held[k];
+                  Vec3 dv = Vec3::Zero();
+                  for (std::uint32_t q = m_heldNbrs.offsets[k]; q < m_heldNbrs.offsets[k + 1]; ++q) {
+                    const std::uint32_t i = m_heldNbrs.indices[q];
+                    const Vec3 xij = p.x[i] - p.x[j];
+                    const Real g = CubicSpline::gradFactor(xij.norm(), pairSupport(p.H[i], p.H[j]));
+                    dv += (p.m[i] * invRho0 * (dt * p.kappa[i] + p.kappaV[i]) * g) * xij;
+                  }
+                  m_fluid.v[j] += dv;
+                }
+              });
 }
 
 void Simulation::restoreHeld(std::vector<Real>& field, const std::vector<Real>& saved) const {

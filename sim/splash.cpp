@@ -1,12 +1,11 @@
 #include "sim/splash.h"
 
-#include <tbb/parallel_for.h>
-
 #include <algorithm>
 #include <cmath>
 
 #include "sim/kernels.h"
 #include "sim/levels.h"
+#include "sim/parallel.h"
 #include "sim/simulation.h"
 
 namespace fp::sim {
@@ -76,7 +75,7 @@ void SplashGenerator::searchNeighbors(const ParticleSet& p, const BoundarySet& b
   m_sorted.H.resize(n);
   m_sorted.rho.resize(n);
   m_sorted.flags.assign(n, 0);
-  tbb::parallel_for(Range(0, n, kGrain), [&](const Range& r) {
+  parallelFor(Range(0, n, kGrain), [&](const Range& r) {
     for (std::size_t s = r.begin(); s < r.end(); ++s) {
       const std::uint32_t i = m_order[s];
       m_sorted.x[s] = p.x[i];
@@ -116,7 +115,7 @@ const SplashParticles& SplashGenerator::generate(const ParticleSet& p, const Bou
   const Real Hb = boundary.support();
   m_outward.resize(n);
   m_spawns.resize(n);
-  tbb::parallel_for(Range(0, n, kGrain), [&](const Range& range) {
+  parallelFor(Range(0, n, kGrain), [&](const Range& range) {
     for (std::size_t s = range.begin(); s < range.end(); ++s) {
       const std::uint32_t i = m_order[s];
       const bool spawns = (m_sorted.flags[s] & kFlagSurface) && m_fluidNbrs.count(s) < maxNeighbors;
@@ -174,7 +173,7 @@ const SplashParticles& SplashGenerator::generate(const ParticleSet& p, const Bou
   const Real alphaMin = Real(params.splashAlphaMin);
   const Real alphaSpan = Real(params.splashAlphaMax - params.splashAlphaMin);
   const Real noise = Real(params.splashNoise);
-  tbb::parallel_for(Range(0, n, kGrain), [&](const Range& r) {
+  parallelFor(Range(0, n, kGrain), [&](const Range& r) {
     for (std::size_t i = r.begin(); i < r.end(); ++i) {
       if (!m_spawns[i])
         continue;

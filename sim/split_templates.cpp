@@ -1,8 +1,8 @@
 #include "sim/split_templates.h"
 
-#include <tbb/parallel_for.h>
-
 #include <cmath>
+
+#include "sim/parallel.h"
 
 namespace fp::sim {
 
@@ -219,7 +219,7 @@ std::vector<Vec3d> optimise(const Objective& obj, std::vector<Vec3d> x, int iter
 SplitTemplates::SplitTemplates() {
   m_offsets.resize(kMaxChildren + 1);
   m_residual.assign(kMaxChildren + 1, 0.0);
-  tbb::parallel_for(kMinChildren, kMaxChildren + 1, [&](int n) {
+  parallelFor(kMinChildren, kMaxChildren + 1, [&](int n) {
     const Objective obj(n);
     const int k = int(std::lround(std::cbrt(double(n))));
     std::vector<Vec3d> x = optimise(obj, k * k * k == n ? cubicLattice(k) : fibonacciBall(n), 200);
