@@ -262,6 +262,10 @@ void LevelEstimator::compute(ParticleSet& p, const NeighborList& fluidNbrs, cons
   const Real r = Real(params.particleRadius);
   const double mBase = double(mFine) * params.massRatio;
   const bool dynamic = mode == AdaptivityMode::FluidPlaying;
+  // the surface of the previous computation, for the hysteresis of the targets (phi is 0 only there)
+  std::vector<std::uint8_t> wasSurface(n);
+  for (std::size_t i = 0; i < n; ++i)
+    wasSurface[i] = p.phi[i] == Real(0);
   // Three passes over the neighbours in all: surface, raw curl and velocity difference; their kernel average
   // with the first distance pass; the second distance pass.
   if (dynamic) {
@@ -334,10 +338,13 @@ void LevelEstimator::compute(ParticleSet& p, const NeighborList& fluidNbrs, cons
       // Hysteresis: a target within the band around the current optimal mass keeps it, so that the small
       // motions of water at rest (a surface flag that comes and goes, a distance that wavers) do not move the
       // resolution. The coarsest target is always followed, so that the deep water ends as coarse as the
-      // levels ask (a held target would stop the coarsening short, up to the band below m_base).
+      // levels ask (a held target would stop the coarsening short, up to the band below m_base), and so is
+      // the finest of a particle on the surface at this computation and the one before, so that the surface
+      // that stays ends fine.
       const double held = double(p.mOpt[i]);
       const bool coarsest = m >= mBase * (1.0 - 1e-6);
-      if (params.targetBand > 0.0 && !coarsest && std::abs(m - held) <= params.targetBand * held)
+      const bool finest = p.phi[i] == Real(0) && wasSurface[i];
+      if (params.targetBand > 0.0 && !coarsest && !finest && std::abs(m - held) <= params.targetBand * held)
         m = held;
       target[i] = Real(m);
     }
