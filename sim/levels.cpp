@@ -22,6 +22,9 @@ constexpr Real kMinImbalance = Real(0.1);
 constexpr int kMaxPropagationPasses = 24;
 // passes per step once phi exists: enough to follow a surface that moves less than a spacing per step
 constexpr int kPassesPerStep = 2;
+// Hysteresis of the optimal mass (docs/method.md, Levels): a new target within this share of the current
+// m_opt leaves it unchanged. The share step of Adaptivity::adapt (sim/adaptivity.cpp) uses the same band.
+constexpr double kTargetBand = 0.3;
 }  // namespace
 
 double levelRamp(double x, double lo, double hi) {
@@ -344,7 +347,7 @@ void LevelEstimator::compute(ParticleSet& p, const NeighborList& fluidNbrs, cons
       const double held = double(p.mOpt[i]);
       const bool coarsest = m >= mBase * (1.0 - 1e-6);
       const bool finest = p.phi[i] == Real(0) && wasSurface[i];
-      if (params.targetBand > 0.0 && !coarsest && !finest && std::abs(m - held) <= params.targetBand * held)
+      if (!coarsest && !finest && std::abs(m - held) <= kTargetBand * held)
         m = held;
       target[i] = Real(m);
     }

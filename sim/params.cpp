@@ -69,10 +69,6 @@ ParamTable::ParamTable() : ParamTableOf<SimParams>("parameter", &ParamTable::val
       "largest velocity-difference level Rmax_nu", &P::velocityDifferenceRmax, 8.0);
   add("mass_smoothing", "adaptivity", "-", 0.01, 1.0, live,
       "share of the new optimal mass taken per solver step (1: no smoothing)", &P::massSmoothing, 0.25);
-  add("target_band", "adaptivity", "-", 0.0, 1.0, live,
-      "hysteresis: the optimal mass follows the levels only when they ask for more than this share above or "
-      "below it (except the coarsest), and a particle shares only above (1 + band) m_opt (0: off)",
-      &P::targetBand, 0.3);
   add("adaptation_period", "adaptivity", "steps", 1, 100, live, "solver steps between adaptation steps",
       &P::adaptationPeriod, 1);
   add("levels_period", "adaptivity", "-", 1, 100, live,

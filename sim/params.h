@@ -52,7 +52,6 @@ struct SimParams {
   double velocityDifferenceHi;
   double velocityDifferenceRmax;
   double massSmoothing;
-  double targetBand;
   int adaptationPeriod;
   int levelsPeriod;
   bool cflLimitedRefinement;

@@ -90,8 +90,8 @@ TEST(AdaptivePhysicsTest, TankAtRestStaysStillFineAtTheSurfaceCoarseInside) {
 
 // The desktop's resting tank (issue 14, docs/method.md "The adaptive tank at rest"): once settled, the
 // resolution stops churning and the water does not stand high. Before the hysteresis of the targets
-// (target_band) the defaults ran 4.5 splits and merges and 45 shares a step from 1 s to 1.5 s and the surface
-// stood 7.3 mm above uniform-high's.
+// (kTargetBand, sim/levels.cpp) the defaults ran 4.5 splits and merges and 45 shares a step from 1 s to 1.5 s
+// and the surface stood 7.3 mm above uniform-high's.
 TEST(AdaptivePhysicsTest, HandTankAtRestStopsChurningAndStandsNearUniformHigh) {
   SceneDesc scene = fp::engine::loadScene(std::string(FP_SOURCE_DIR) + "/assets/scenes/hand_tank.json");
   scene.mode = AdaptivityMode::FluidPlaying;
