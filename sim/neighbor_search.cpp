@@ -23,17 +23,18 @@ void UniformGrid::setup(const Aabb& domain, Real cellSize, std::size_t maxCells)
   m_invCellSize = Real(1) / cellSize;
   m_origin = (domain.min().array() - double(cellSize)).cast<Real>();
   const Vec3d extent = domain.sizes().array() + 2.0 * double(cellSize);
-  double cells = 1.0;
-  for (int d = 0; d < 3; ++d) {
-    m_dims[d] = std::max(1, int(std::ceil(extent[d] / double(cellSize))));
-    cells *= m_dims[d];
-  }
-  if (cells > double(maxCells)) {
+  // counted in double first: a huge domain (or a tiny cell) must not overflow the int dimensions
+  Vec3d dims;
+  for (int d = 0; d < 3; ++d)
+    dims[d] = std::max(1.0, std::ceil(extent[d] / double(cellSize)));
+  if (!(dims.prod() <= double(maxCells))) {
     std::ostringstream s;
-    s << "neighbour grid of " << m_dims.x() << " x " << m_dims.y() << " x " << m_dims.z()
+    s << "neighbour grid of " << dims.x() << " x " << dims.y() << " x " << dims.z()
       << " cells is too large: shrink the domain or enlarge the particle radius";
     throw InputError(s.str());
   }
+  for (int d = 0; d < 3; ++d)
+    m_dims[d] = int(dims[d]);
 }
 
 Eigen::Vector3i UniformGrid::cellCoord(const Vec3& p) const {

@@ -201,6 +201,14 @@ TEST(NeighborSearchTest, RejectsAGridThatIsTooLarge) {
   EXPECT_THROW(grid.setup(Aabb(Vec3d(0, 0, 0), Vec3d(100, 100, 100)), 0.001f), InputError);
 }
 
+TEST(NeighborSearchTest, RejectsADomainWhoseCellsOverflowAnInt) {
+  // found by fuzz_scene: a domain 2.2e63 m long made int(cells) undefined (on x86 INT_MIN, clamped to one
+  // cell by std::max, so the grid passed the size check with a single cell along that axis)
+  UniformGrid grid;
+  EXPECT_THROW(grid.setup(Aabb(Vec3d(-0.3, -0.1, -5.2), Vec3d(0.3, 0.4, 2.2e63)), 0.02f), InputError);
+  EXPECT_THROW(grid.setup(Aabb(Vec3d(0, 0, 0), Vec3d(1e12, 1e12, 1e12)), 0.02f), InputError);
+}
+
 TEST(NeighborSearchTest, SymmetricBuildGivesTheSameListsInTheSameOrder) {
   // supports spread continuously over [h, 3 h] as in the adaptive modes, with a share of exact ties
   const Aabb box(Vec3d(-0.2, 0.0, -0.1), Vec3d(0.3, 0.4, 0.2));
