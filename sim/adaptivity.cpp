@@ -339,9 +339,13 @@ AdaptivityStats Adaptivity::adapt(const AdaptContext& ctx, bool ignoreDelay) {
     }
   }
 
-  // share: a heavy particle gives half its excess to light neighbours
+  // share: a heavy particle gives half its excess to light neighbours, once its mass leaves the band of the
+  // targets' hysteresis (kTargetBand in sim/levels.cpp, 0.3): within it the particle is as close to its
+  // target as the target is to the levels, and sharing would only churn water at rest
+  constexpr double kTargetBand = 0.3;
+  const Real shareAbove = Real(std::max(params.shareAbove, 1.0 + kTargetBand));
   for (std::size_t i = 0; i < n; ++i) {
-    if (m_locked[i] || ratio(i) < Real(params.shareAbove))
+    if (m_locked[i] || ratio(i) < shareAbove)
       continue;
     if (transferMass(ctx, i, 0.5 * (double(p.m[i]) - double(p.mOpt[i])), false))
       ++stats.redistributions;

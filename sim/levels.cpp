@@ -22,6 +22,9 @@ constexpr Real kMinImbalance = Real(0.1);
 constexpr int kMaxPropagationPasses = 24;
 // passes per step once phi exists: enough to follow a surface that moves less than a spacing per step
 constexpr int kPassesPerStep = 2;
+// Hysteresis of the optimal mass (docs/method.md, Levels): a new target within this share of the current
+// m_opt leaves it unchanged. The share step of Adaptivity::adapt (sim/adaptivity.cpp) uses the same band.
+constexpr double kTargetBand = 0.3;
 }  // namespace
 
 double levelRamp(double x, double lo, double hi) {
@@ -75,8 +78,24 @@ bool isSurface(const ParticleSet& p, std::size_t i, Vec3 away, Real volume, cons
     const Vec3 d = xj - xi;
     return d.dot(dir) >= kConeCos * d.norm();
   };
+  // A neighbour larger than the particle covers more of its view: the cone widens by the angle of the
+  // neighbour's excess radius (r_j - r_i, from the supports 4 r), so that a fine particle in a pocket under
+  // coarse ones is not taken for a surface particle (which would refine the water around it at rest).
+  const Real ri = p.H[i] * Real(0.25);
+  const Real kConeSin = Real(0.5);
+  auto inWidenedCone = [&](std::uint32_t j) {
+    const Vec3 d = p.x[j] - xi;
+    const Real dist = d.norm();
+    const Real excess = p.H[j] * Real(0.25) - ri;
+    if (!(excess > Real(0)) || !(dist > Real(0)))
+      return d.dot(dir) >= kConeCos * dist;
+    const Real s = std::min(Real(1), excess / dist);
+    const Real c = std::sqrt(Real(1) - s * s);
+    // cos(30 degrees + asin(s))
+    return d.dot(dir) >= (kConeCos * c - kConeSin * s) * dist;
+  };
   for (std::uint32_t k = fluidNbrs.offsets[i]; k < fluidNbrs.offsets[i + 1]; ++k) {
-    if (inCone(p.x[fluidNbrs.indices[k]]))
+    if (inWidenedCone(fluidNbrs.indices[k]))
       return false;
   }
   for (std::uint32_t k = boundaryNbrs.offsets[i]; k < boundaryNbrs.offsets[i + 1]; ++k) {
@@ -246,6 +265,10 @@ void LevelEstimator::compute(ParticleSet& p, const NeighborList& fluidNbrs, cons
   const Real r = Real(params.particleRadius);
   const double mBase = double(mFine) * params.massRatio;
   const bool dynamic = mode == AdaptivityMode::FluidPlaying;
+  // the surface of the previous computation, for the hysteresis of the targets (phi is 0 only there)
+  std::vector<std::uint8_t> wasSurface(n);
+  for (std::size_t i = 0; i < n; ++i)
+    wasSurface[i] = p.phi[i] == Real(0);
   // Three passes over the neighbours in all: surface, raw curl and velocity difference; their kernel average
   // with the first distance pass; the second distance pass.
   if (dynamic) {
@@ -315,6 +338,17 @@ void LevelEstimator::compute(ParticleSet& p, const NeighborList& fluidNbrs, cons
           m = std::max(m, std::min(mSurface, mCfl));
         }
       }
+      // Hysteresis: a target within the band around the current optimal mass keeps it, so that the small
+      // motions of water at rest (a surface flag that comes and goes, a distance that wavers) do not move the
+      // resolution. The coarsest target is always followed, so that the deep water ends as coarse as the
+      // levels ask (a held target would stop the coarsening short, up to the band below m_base), and so is
+      // the finest of a particle on the surface at this computation and the one before, so that the surface
+      // that stays ends fine.
+      const double held = double(p.mOpt[i]);
+      const bool coarsest = m >= mBase * (1.0 - 1e-6);
+      const bool finest = p.phi[i] == Real(0) && wasSurface[i];
+      if (!coarsest && !finest && std::abs(m - held) <= kTargetBand * held)
+        m = held;
       target[i] = Real(m);
     }
   });

@@ -23,17 +23,18 @@ void UniformGrid::setup(const Aabb& domain, Real cellSize, std::size_t maxCells)
   m_invCellSize = Real(1) / cellSize;
   m_origin = (domain.min().array() - double(cellSize)).cast<Real>();
   const Vec3d extent = domain.sizes().array() + 2.0 * double(cellSize);
-  double cells = 1.0;
-  for (int d = 0; d < 3; ++d) {
-    m_dims[d] = std::max(1, int(std::ceil(extent[d] / double(cellSize))));
-    cells *= m_dims[d];
-  }
-  if (cells > double(maxCells)) {
+  // counted in double first: a huge domain (or a tiny cell) must not overflow the int dimensions
+  Vec3d dims;
+  for (int d = 0; d < 3; ++d)
+    dims[d] = std::max(1.0, std::ceil(extent[d] / double(cellSize)));
+  if (!(dims.prod() <= double(maxCells))) {
     std::ostringstream s;
-    s << "neighbour grid of " << m_dims.x() << " x " << m_dims.y() << " x " << m_dims.z()
+    s << "neighbour grid of " << dims.x() << " x " << dims.y() << " x " << dims.z()
       << " cells is too large: shrink the domain or enlarge the particle radius";
     throw InputError(s.str());
   }
+  for (int d = 0; d < 3; ++d)
+    m_dims[d] = int(dims[d]);
 }
 
 Eigen::Vector3i UniformGrid::cellCoord(const Vec3& p) const {
@@ -136,9 +137,9 @@ inline int floorCell(Real f) {
 
 }  // namespace
 
-void NeighborSearch::build(const UniformGrid& grid, const std::vector<Vec3>& qx, const std::vector<Real>& qH,
-                           const std::vector<GridPoints>& sources, int selfSource, Real maxH,
-                           NeighborList& out) {
+void NeighborSearch::buildLists(const UniformGrid& grid, const std::vector<Vec3>& qx,
+                                const std::vector<Real>& qH, const std::vector<GridPoints>& sources,
+                                int selfSource, Real maxH, NeighborList& out, bool ownSupport) {
   const std::size_t n = qx.size();
   const std::size_t nChunks = (n + kChunk - 1) / kChunk;
   const Eigen::Vector3i dims = grid.dims();
@@ -183,8 +184,8 @@ void NeighborSearch::build(const UniformGrid& grid, const std::vector<Vec3>& qx,
   m_cellMaxH.resize(sources.size());
   m_windowMaxH.resize(sources.size());
   // every query's reach of a source with per-point supports is at most this many cells (queries with larger
-  // supports do without the window)
-  const int windowReach = std::max(1, int(std::ceil(maxH * invCell)));
+  // supports do without the window; the own-support search adds the margin to its reach, see below)
+  const int windowReach = std::max(1, int(std::ceil((ownSupport ? maxH + margin : maxH) * invCell)));
   const int nx = dims.x();
   const std::size_t nRows = std::size_t(dims.y()) * std::size_t(dims.z());
   for (std::size_t s = 0; s < sources.size(); ++s) {
@@ -253,18 +254,35 @@ void NeighborSearch::build(const UniformGrid& grid, const std::vector<Vec3>& qx,
         const std::uint32_t skip =
             s == selfSource ? std::uint32_t(i) : std::numeric_limits<std::uint32_t>::max();
         const std::uint32_t offset = src.indexOffset;
-        // the largest pair support this particle can have with this source
-        const Real hMax = Real(0.5) * (Hi + (src.H ? maxH : src.uniformH));
+        // the largest pair support this particle can have with this source (with its own support only:
+        // H_i, since then H_j <= H_i)
+        const Real hMax = ownSupport && src.H ? std::min(Hi, Real(0.5) * (Hi + maxH))
+                                              : Real(0.5) * (Hi + (src.H ? maxH : src.uniformH));
+        // the largest support of the points kept
+        const Real hCap = ownSupport ? Hi : std::numeric_limits<Real>::infinity();
         const Real hMax2 = hMax * hMax;
         // a source wholly out of reach (the hand, far from most of the water) costs no row at all
         if ((xi - xi.cwiseMax(bounds[std::size_t(s)].min()).cwiseMin(bounds[std::size_t(s)].max()))
                 .squaredNorm() >= hMax2)
           continue;
         const int reach = std::max(1, int(std::ceil(hMax * invCell)));
-        const bool windowed = reach <= windowReach;
-        const int x0 = std::max(0, c.x() - reach), x1 = std::min(dims.x() - 1, c.x() + reach);
-        const int y0 = std::max(0, c.y() - reach), y1 = std::min(dims.y() - 1, c.y() + reach);
-        const int z0 = std::max(0, c.z() - reach), z1 = std::min(dims.z() - 1, c.z() + reach);
+        int x0 = std::max(0, c.x() - reach), x1 = std::min(dims.x() - 1, c.x() + reach);
+        int y0 = std::max(0, c.y() - reach), y1 = std::min(dims.y() - 1, c.y() + reach);
+        int z0 = std::max(0, c.z() - reach), z1 = std::min(dims.z() - 1, c.z() + reach);
+        if (ownSupport) {
+          // The cells that x_i -+ (hMax + margin) fall in, as the sort rounds: a superset of build()'s
+          // (a pair of supports H_i = H_j = one cell, 2r apart twice, lies two cells apart when the cell
+          // index rounds down for i and up for j; build() finds it through the coarser reach, a reach of
+          // ceil(H_i / cell) cells would miss it).
+          const Real w = hMax + margin;
+          x0 = std::max(0, floorCell((xi.x() - w - origin.x()) * invCell));
+          x1 = std::min(dims.x() - 1, floorCell((xi.x() + w - origin.x()) * invCell));
+          y0 = std::max(0, floorCell((xi.y() - w - origin.y()) * invCell));
+          y1 = std::min(dims.y() - 1, floorCell((xi.y() + w - origin.y()) * invCell));
+          z0 = std::max(0, floorCell((xi.z() - w - origin.z()) * invCell));
+          z1 = std::min(dims.z() - 1, floorCell((xi.z() + w - origin.z()) * invCell));
+        }
+        const bool windowed = x0 >= c.x() - windowReach && x1 <= c.x() + windowReach;
         for (int cz = z0; cz <= z1; ++cz) {
           const Real dz = slabDistance(xi.z(), origin.z() + Real(cz) * cell, cell, margin);
           for (int cy = y0; cy <= y1; ++cy) {
@@ -341,13 +359,13 @@ void NeighborSearch::build(const UniformGrid& grid, const std::vector<Vec3>& qx,
               for (std::uint32_t j = b; j < e; ++j) {
                 const Real h = Real(0.5) * (Hi + sH[j]);
                 o[kept] = j + offset;
-                kept += std::size_t((j != skip) & ((xi - sx[j]).squaredNorm() < h * h));
+                kept += std::size_t((j != skip) & ((xi - sx[j]).squaredNorm() < h * h) & (sH[j] <= hCap));
               }
               count += kept;
             } else {
               for (std::uint32_t j = b; j < e; ++j) {
                 const Real h = Real(0.5) * (Hi + sH[j]);
-                if (j != skip && (xi - sx[j]).squaredNorm() < h * h)
+                if (j != skip && (xi - sx[j]).squaredNorm() < h * h && sH[j] <= hCap)
                   emit(j + offset);
               }
             }
@@ -422,6 +440,99 @@ void NeighborSearch::build(const UniformGrid& grid, const std::vector<Vec3>& qx,
       const std::size_t i1 = std::min(n, (chunk + 1) * kChunk);
       for (std::size_t i = chunk * kChunk; i < i1; ++i)
         out.offsets[i + 1] += base;
+    }
+  });
+}
+
+void NeighborSearch::buildSymmetric(const UniformGrid& grid, const std::vector<Vec3>& x,
+                                    const std::vector<Real>& H, const std::vector<std::uint32_t>& cells,
+                                    Real maxH, NeighborList& out) {
+  using Range = tbb::blocked_range<std::size_t>;
+  const std::size_t n = x.size();
+  const std::size_t nChunks = (n + kChunk - 1) / kChunk;
+  // A fine point next to coarse ones otherwise searches as far as the coarsest pair support, twice its own
+  // in the adaptive modes; here it searches as far as its own, and the pairs with larger points come from
+  // theirs (a pair is within reach of the larger point's support).
+  buildLists(grid, x, H, {GridPoints{x.data(), H.data(), 0, &cells, 0}}, 0, maxH, m_own, true);
+  const std::uint32_t* ownOff = m_own.offsets.data();
+  const std::uint32_t* own = m_own.indices.data();
+  const Real* h = H.data();
+  // how many larger points hand each point a pair (counts: the same whatever the order of the increments)
+  m_received.assign(n, 0);
+  std::uint32_t* received = m_received.data();
+  parallelFor(Range(0, n, 256), [&](const Range& r) {
+    for (std::size_t i = r.begin(); i < r.end(); ++i) {
+      for (std::uint32_t k = ownOff[i]; k < ownOff[i + 1]; ++k) {
+        if (h[own[k]] < h[i])
+          __atomic_fetch_add(&received[own[k]], 1u, __ATOMIC_RELAXED);
+      }
+    }
+  });
+  // i's list starts after the lists of the points before it: a prefix sum, per chunk and over chunks
+  m_chunkPairs.assign(nChunks + 1, 0);
+  parallelFor(Range(0, nChunks, 1), [&](const Range& cr) {
+    for (std::size_t chunk = cr.begin(); chunk < cr.end(); ++chunk) {
+      std::size_t sum = 0;
+      for (std::size_t i = chunk * kChunk; i < std::min(n, (chunk + 1) * kChunk); ++i)
+        sum += received[i];
+      m_chunkPairs[chunk + 1] = sum;
+    }
+  });
+  for (std::size_t chunk = 0; chunk < nChunks; ++chunk)
+    m_chunkPairs[chunk + 1] += m_chunkPairs[chunk];
+  out.offsets.resize(n + 1);
+  out.offsets[n] = std::uint32_t(ownOff[n] + m_chunkPairs[nChunks]);
+  const std::size_t total = out.offsets[n];
+  if (out.indices.capacity() < total || out.indices.capacity() > 2 * (total + total / 16)) {
+    std::vector<std::uint32_t> fitted;
+    fitted.reserve(total + total / 16);
+    out.indices.swap(fitted);
+  }
+  out.indices.resize(total);
+  std::uint32_t* dst = out.indices.data();
+  // own list first; `received` becomes where i's next received pair goes
+  parallelFor(Range(0, nChunks, 1), [&](const Range& cr) {
+    for (std::size_t chunk = cr.begin(); chunk < cr.end(); ++chunk) {
+      std::size_t before = m_chunkPairs[chunk];
+      for (std::size_t i = chunk * kChunk; i < std::min(n, (chunk + 1) * kChunk); ++i) {
+        const std::uint32_t first = std::uint32_t(ownOff[i] + before);
+        out.offsets[i] = first;
+        before += received[i];
+        std::copy(own + ownOff[i], own + ownOff[i + 1], dst + first);
+        received[i] = first + (ownOff[i + 1] - ownOff[i]);
+      }
+    }
+  });
+  parallelFor(Range(0, n, 256), [&](const Range& r) {
+    for (std::size_t i = r.begin(); i < r.end(); ++i) {
+      for (std::uint32_t k = ownOff[i]; k < ownOff[i + 1]; ++k) {
+        const std::uint32_t j = own[k];
+        if (h[j] < h[i])
+          dst[__atomic_fetch_add(&received[j], 1u, __ATOMIC_RELAXED)] = std::uint32_t(i);
+      }
+    }
+  });
+  // The received pairs arrive in any order: sorted, then merged from the back with the own list (both
+  // ascending), they are build()'s list whatever the thread count.
+  parallelFor(Range(0, n, 256), [&](const Range& r) {
+    std::vector<std::uint32_t> part;
+    for (std::size_t i = r.begin(); i < r.end(); ++i) {
+      std::uint32_t* list = dst + out.offsets[i];
+      const std::size_t a = ownOff[i + 1] - ownOff[i];
+      const std::size_t size = out.offsets[i + 1] - out.offsets[i];
+      if (size == a)
+        continue;
+      part.assign(list + a, list + size);
+      std::sort(part.begin(), part.end());
+      std::size_t ia = a;
+      std::size_t ib = part.size();
+      std::size_t w = size;
+      while (ib > 0) {
+        if (ia > 0 && list[ia - 1] > part[ib - 1])
+          list[--w] = list[--ia];
+        else
+          list[--w] = part[--ib];
+      }
     }
   });
 }

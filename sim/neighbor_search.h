@@ -109,7 +109,16 @@ class NeighborSearch {
   /// (-1: none). `maxH` is the largest support radius among the sources with per-point radii (a source with
   /// a uniform radius is searched only as far as that radius needs). Every list is in ascending index order.
   void build(const UniformGrid& grid, const std::vector<Vec3>& qx, const std::vector<Real>& qH,
-             const std::vector<GridPoints>& sources, int selfSource, Real maxH, NeighborList& out);
+             const std::vector<GridPoints>& sources, int selfSource, Real maxH, NeighborList& out) {
+    buildLists(grid, qx, qH, sources, selfSource, maxH, out, false);
+  }
+
+  /// The lists of build(grid, x, H, {{x, H, 0, &cells, 0}}, 0, maxH, out), the same in the same order, found
+  /// with less work when sizes are mixed: each point searches only as far as its own support, for the points
+  /// no larger than itself, and receives the pairs with larger points from their searches. `x`, `H` and
+  /// `cells` are the points sorted by UniformGrid::sort; `maxH` their largest support [m].
+  void buildSymmetric(const UniformGrid& grid, const std::vector<Vec3>& x, const std::vector<Real>& H,
+                      const std::vector<std::uint32_t>& cells, Real maxH, NeighborList& out);
 
   /// bytes held by scratch buffers (the lists are written in place)
   std::size_t memoryBytes() const {
@@ -118,14 +127,27 @@ class NeighborSearch {
       bytes += c.capacity() * sizeof(Real);
     for (const std::vector<Real>& c : m_windowMaxH)
       bytes += c.capacity() * sizeof(Real);
-    return bytes;
+    return bytes + m_own.memoryBytes() + m_received.capacity() * sizeof(std::uint32_t) +
+           m_chunkPairs.capacity() * sizeof(std::size_t);
   }
 
  private:
+  /// build(); with `ownSupport`, a source with per-point supports yields, for query i, only its points j with
+  /// H_j <= H_i (searched as far as H_i)
+  void buildLists(const UniformGrid& grid, const std::vector<Vec3>& qx, const std::vector<Real>& qH,
+                  const std::vector<GridPoints>& sources, int selfSource, Real maxH, NeighborList& out,
+                  bool ownSupport);
+
   // per source with per-point supports, indexed like its cell starts: the largest support of each cell
   std::vector<std::vector<Real>> m_cellMaxH;
   // the same, largest over a window of cells along x
   std::vector<std::vector<Real>> m_windowMaxH;
+  // buildSymmetric: each point's neighbours no larger than itself
+  NeighborList m_own;
+  // buildSymmetric: pairs each point receives from larger points, then where the next one goes
+  std::vector<std::uint32_t> m_received;
+  // buildSymmetric: pairs received by the points of the chunks before each chunk
+  std::vector<std::size_t> m_chunkPairs;
 };
 
 }  // namespace fp::sim

@@ -396,7 +396,10 @@ void Simulation::searchNeighbors() {
   const Real maxH = hRange.second;
 
   GridPoints fluidSrc{m_fluid.x.data(), m_fluid.H.data(), 0, &m_fluidCells, 0};
-  m_search.build(m_grid, m_fluid.x, m_fluid.H, {fluidSrc}, 0, maxH, m_fluidNbrs);
+  if (hRange.first < maxH)  // mixed sizes: each particle searches only as far as its own support
+    m_search.buildSymmetric(m_grid, m_fluid.x, m_fluid.H, m_fluidCells, maxH, m_fluidNbrs);
+  else
+    m_search.build(m_grid, m_fluid.x, m_fluid.H, {fluidSrc}, 0, maxH, m_fluidNbrs);
   std::vector<GridPoints> walls;
   if (nStatic > 0)
     walls.push_back(GridPoints{m_boundary.x.data(), nullptr, m_boundary.support(), &m_staticCells, 0});

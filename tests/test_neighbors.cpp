@@ -200,3 +200,55 @@ TEST(NeighborSearchTest, RejectsAGridThatIsTooLarge) {
   UniformGrid grid;
   EXPECT_THROW(grid.setup(Aabb(Vec3d(0, 0, 0), Vec3d(100, 100, 100)), 0.001f), InputError);
 }
+
+TEST(NeighborSearchTest, RejectsADomainWhoseCellsOverflowAnInt) {
+  // found by fuzz_scene: a domain 2.2e63 m long made int(cells) undefined (on x86 INT_MIN, clamped to one
+  // cell by std::max, so the grid passed the size check with a single cell along that axis)
+  UniformGrid grid;
+  EXPECT_THROW(grid.setup(Aabb(Vec3d(-0.3, -0.1, -5.2), Vec3d(0.3, 0.4, 2.2e63)), 0.02f), InputError);
+  EXPECT_THROW(grid.setup(Aabb(Vec3d(0, 0, 0), Vec3d(1e12, 1e12, 1e12)), 0.02f), InputError);
+}
+
+TEST(NeighborSearchTest, SymmetricBuildGivesTheSameListsInTheSameOrder) {
+  // supports spread continuously over [h, 3 h] as in the adaptive modes, with a share of exact ties
+  const Aabb box(Vec3d(-0.2, 0.0, -0.1), Vec3d(0.3, 0.4, 0.2));
+  const Real h = 0.03f;
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  Cloud c = randomCloud(4000, h, 0.0, 23, box);
+  for (Real& H : c.H)
+    H = u(rng) < 0.4 ? h : Real(h * (1.0 + 2.0 * u(rng)));
+  // and a lattice of fine points 2r = h / 2 apart on the cell borders, as the scenes start: pairs twice that
+  // apart lie at |x_ij| = H_ij up to round-off, where the cell index may round either way
+  const Vec3d origin = box.min() - Vec3d::Constant(double(h));  // the grid's cell (0, 0, 0)
+  for (int k = 0; k < 12 * 12 * 12; ++k) {
+    const Vec3d step(k % 12 + 4, k / 12 % 12 + 4, k / 144 + 4);
+    c.x.push_back((origin + 0.5 * double(h) * step).cast<Real>());
+    c.H.push_back(h);
+  }
+  UniformGrid grid;
+  grid.setup(box, h);
+  std::vector<std::uint32_t> order, cells;
+  grid.sort(c.x.data(), c.x.size(), order, cells);
+  Cloud s = c;
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    s.x[k] = c.x[order[k]];
+    s.H[k] = c.H[order[k]];
+  }
+  const Real maxH = *std::max_element(s.H.begin(), s.H.end());
+  NeighborSearch plain;
+  NeighborList expected;
+  plain.build(grid, s.x, s.H, {GridPoints{s.x.data(), s.H.data(), 0, &cells, 0}}, 0, maxH, expected);
+  for (int threads : {1, 2}) {
+    tbb::global_control gc(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
+    NeighborSearch symmetric;
+    NeighborList list;
+    // twice: the second build reuses the first one's rooms and capacity
+    for (int pass = 0; pass < 2; ++pass) {
+      symmetric.buildSymmetric(grid, s.x, s.H, cells, maxH, list);
+      ASSERT_EQ(list.offsets, expected.offsets) << threads << " thread(s), pass " << pass;
+      ASSERT_EQ(list.indices, expected.indices) << threads << " thread(s), pass " << pass;
+    }
+  }
+  EXPECT_GT(expected.indices.size(), 4000u * 10);
+}
