@@ -57,6 +57,7 @@ struct SoakFigures {
   int belowTwoLayers = 0;        // frames (after the first second) with fewer than two fine surface layers
   double speedMax = 0;           // fastest fluid particle at a frame end [m/s]
   double rssAfterStart = 0, rssEnd = 0, simBytesAfterStart = 0, simBytesEnd = 0;
+  std::size_t countMaxAtStart = 0;  // the most particles up to the memory sample after the start
   std::uint64_t splits = 0, merges = 0, steps = 0;
   std::string failure;  // the first broken invariant, empty when all held
 };
@@ -74,7 +75,8 @@ std::ostream& operator<<(std::ostream& o, const SoakFigures& f) {
     << " frames)\n"
     << "memory after the start: rss " << f.rssAfterStart / 1e6 << " MB, simulation "
     << f.simBytesAfterStart / 1e6 << " MB; at the end: rss " << f.rssEnd / 1e6 << " MB, simulation "
-    << f.simBytesEnd / 1e6 << " MB\n";
+    << f.simBytesEnd / 1e6 << " MB; most particles " << f.countMaxAtStart << " by then, " << f.countMax
+    << " by the end\n";
   return o;
 }
 
@@ -176,6 +178,7 @@ SoakFigures soak(double seconds, double settle) {
     if (frame == int(settle * frameRate)) {
       f.rssAfterStart = residentBytes();
       f.simBytesAfterStart = double(sim.memoryBytes());
+      f.countMaxAtStart = f.countMax;
     }
     // the recording again from the start once it has ended (the hand is back at its first pose then)
     if (t - cycleStart > track.duration()) {
@@ -206,10 +209,16 @@ void expectSound(const SoakFigures& f) {
   // boundary particles push it out over the next steps. Deeper than a particle radius would be a hole.
   EXPECT_LT(f.penetrationMax, 0.0079);
   EXPECT_LT(f.densityErrorMax, 0.05);
-  // flat: the process and the simulation's arrays hold no more at the end than after the start (+10%, the
-  // particle count varies with the hand)
-  EXPECT_LT(f.simBytesEnd, 1.1 * f.simBytesAfterStart);
-  EXPECT_LT(f.rssEnd, 1.1 * f.rssAfterStart);
+  // flat: memory grows with the most particles held at once (the arrays keep their capacity for the next
+  // surge), never with the time run. The simulation's arrays at the end hold no more than after the start,
+  // scaled by how much the peak count grew since (+10 %); the process no more than 10 % over its size after
+  // the start plus that growth of the arrays. (The 10-minute soak's peak grew 1.41x, from 2,961 to 4,172
+  // particles, after the first minute, and its arrays 1.16x: a bound without the peak failed there; a leak of
+  // 100 bytes a frame would fail the second bound there.)
+  ASSERT_GT(f.countMaxAtStart, 0u);
+  const double peakGrowth = double(f.countMax) / double(f.countMaxAtStart);
+  EXPECT_LT(f.simBytesEnd, 1.1 * peakGrowth * f.simBytesAfterStart);
+  EXPECT_LT(f.rssEnd, 1.1 * f.rssAfterStart + (peakGrowth - 1.0) * f.simBytesAfterStart);
 }
 
 TEST(Soak, ThirtySeconds) {
