@@ -4,7 +4,7 @@
 #                                     tank with a recorded hand into out/demo_frames/ as PNG)
 #   bash scripts/bootstrap.sh test    install, check formatting, build, run all tests, then the sanitizer tests
 #                                     (ASan+UBSan) and the fuzzers (30 s each); FP_CI_TSAN=1 adds the
-#                                     ThreadSanitizer stage (see docs/robustness.md: not usable yet)
+#                                     ThreadSanitizer tests (docs/robustness.md, "Races": not passing yet)
 #   bash scripts/bootstrap.sh build   install and build only
 # Environment: FP_JOBS (default 2) sets the build and ctest parallelism.
 set -euo pipefail
@@ -161,11 +161,13 @@ run_sanitizer_tests() {
   return "${status}"
 }
 
-# ThreadSanitizer over the unit tests (the app loop's session tests among them) and the small physics tests,
-# with TBB as Debian ships it. Suppressions only in tests/tsan.supp, each with its reason. Opt-in
-# (FP_CI_TSAN=1): Debian's libtbb is not instrumented, so every task spawn reads as a race with the spawning
-# thread's earlier writes (docs/robustness.md, "Races").
-readonly TSAN_TARGETS=(test_sim_unit test_engine test_app_unit test_physics fluidplaying)
+# ThreadSanitizer (docs/robustness.md, "Races") over the simulation's unit tests, the app loop's (AppSessionTest,
+# AppLoopTest: the steps run on a TBB task or a thread beside the frame), the small physics tests and the canary
+# that proves a race is still reported (TsanCanary.*, tests/tsan_canary.cpp). TBB as Debian ships it: its
+# libtbb is not instrumented, so sim/parallel.h states the spawn and join edges of every parallel call, and
+# tests/tsan.supp suppresses only races inside TBB's own objects, each with its reason. Any report fails the
+# test (halt_on_error). The tests are capped at FP_TSAN_SECONDS (default 1200) in all.
+readonly TSAN_TARGETS=(test_sim_unit test_app_unit test_physics tsan_canary)
 run_tsan_tests() {
   section "ThreadSanitizer build (build-tsan/)"
   cmake -S . -B build-tsan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DFP_TSAN=ON -DFP_WERROR=ON ||
@@ -173,14 +175,19 @@ run_tsan_tests() {
   cmake --build build-tsan -j"${JOBS}" --target "${TSAN_TARGETS[@]}" || die "the ThreadSanitizer build failed"
   local status=0
   local -a tsan_env=(
-    "TSAN_OPTIONS=suppressions=${PWD}/tests/tsan.supp:halt_on_error=1:second_deadlock_stack=1"
+    "TSAN_OPTIONS=suppressions=${PWD}/tests/tsan.supp:halt_on_error=1:second_deadlock_stack=1:history_size=7"
   )
-  section "ThreadSanitizer tests: unit"
-  env "${tsan_env[@]}" ctest --test-dir build-tsan --output-on-failure -j"${JOBS}" -L unit --no-tests=error ||
-    status=1
+  local cap="${FP_TSAN_SECONDS:-1200}" start
+  start=$(date +%s)
+  section "ThreadSanitizer tests: unit (simulation, app loop, canary)"
+  # the suites built above (the others are not in build-tsan); the architecture rules run in the Release build
+  env "${tsan_env[@]}" timeout "${cap}" ctest --test-dir build-tsan --output-on-failure -j"${JOBS}" -L unit \
+    -E '^Architecture\.' --no-tests=error || status=1
   section "ThreadSanitizer tests: physics *Small*"
-  env "${tsan_env[@]}" ctest --test-dir build-tsan --output-on-failure -j"${JOBS}" -L physics -R Small \
-    --no-tests=ignore || status=1
+  local left=$((cap - ($(date +%s) - start)))
+  ((left > 0)) || left=1
+  env "${tsan_env[@]}" timeout "${left}" ctest --test-dir build-tsan --output-on-failure -j"${JOBS}" -L physics \
+    -R Small --no-tests=error || status=1
   return "${status}"
 }
 
@@ -261,6 +268,7 @@ case "${MODE}" in
     timed build build || die "the build failed"
     timed tests run_tests || failures+=("tests")
     timed asan run_sanitizer_tests || failures+=("sanitizer tests")
+    # opt-in until the last TBB-internal reports are handled (docs/robustness.md, "Races")
     if [[ "${FP_CI_TSAN:-0}" == 1 ]]; then
       timed tsan run_tsan_tests || failures+=("thread sanitizer tests")
     fi

@@ -1,7 +1,7 @@
 #pragma once
 /// The project's parallel calls: TBB's parallel_for, parallel_reduce, parallel_deterministic_reduce,
 /// parallel_sort and task_group with the same arguments, and nothing in sim/ or engine/ calls TBB's loops
-/// directly (the ThreadSanitizer stage of scripts/bootstrap.sh checks it).
+/// directly (ctest Tsan.ParallelCallsGoThroughTheWrappers checks it).
 ///
 /// Why a wrapper: Debian's libtbb is not built with ThreadSanitizer, so TSan cannot see that a worker's loop
 /// body runs after the caller spawned it, nor that the caller continues after every body finished; every
@@ -32,6 +32,12 @@
 
 #ifdef FP_TSAN_ANNOTATE
 #include <sanitizer/tsan_interface.h>
+
+#include <cstddef>
+#include <cstdint>
+
+/// libtsan's dynamic annotation: the range is fresh memory, its access history is dropped
+extern "C" void AnnotateNewMemory(const char* file, int line, const volatile void* mem, std::size_t size);
 #endif
 
 namespace fp::sim {
@@ -59,9 +65,20 @@ class ParallelEdges {
   void leave() {
     __tsan_release(&m_done);
   }
-  /// the caller, after the TBB call returned: every body's writes are visible
-  void join() {
+  /// the caller, after the TBB call returned: every body's writes are visible. Inlined, so that
+  /// forgetDeadStack() starts where the frame of the caller's outOfLine() started.
+  [[gnu::always_inline]] void join() {
     __tsan_acquire(&m_done);
+    forgetDeadStack();
+  }
+  /// TBB keeps a loop's wait context and root reduction on the caller's stack, in the frames of outOfLine()
+  /// and below, and workers count them down after their last body, inside libtbb; the caller's next frames
+  /// reuse that stack. It is dead once the call returned: its access history goes (from this function's frame
+  /// down, where outOfLine's was), so the reuse is not taken for a race.
+  [[gnu::noinline]] static void forgetDeadStack() {
+    constexpr std::size_t kSpan = 16384;
+    const auto top = reinterpret_cast<std::uintptr_t>(__builtin_frame_address(0));
+    AnnotateNewMemory(__FILE__, __LINE__, reinterpret_cast<const volatile void*>(top - kSpan), kSpan);
   }
 
  private:
@@ -75,6 +92,36 @@ class ParallelEdges {
   void join() {}
 #endif
 };
+
+/// A reduction's value as TBB carries it between bodies and joins. TBB assigns the last join's value to the
+/// root body after our join returned, possibly on a worker, and the caller copies it out before the TBB
+/// call returns: under ThreadSanitizer an assignment releases the value's address and a copy acquires it.
+/// Otherwise a plain aggregate of the value.
+template <class V>
+struct Carried {
+  V value;
+#ifdef FP_TSAN_ANNOTATE
+  explicit Carried(const V& v) : value(v) {}
+  Carried(const Carried& other) : value((__tsan_acquire(const_cast<Carried*>(&other)), other.value)) {}
+  Carried& operator=(const Carried& other) {
+    __tsan_acquire(const_cast<Carried*>(&other));
+    value = other.value;
+    __tsan_release(this);
+    return *this;
+  }
+#endif
+};
+
+/// Calls `f` (a TBB call). Under ThreadSanitizer in a frame of its own, so that TBB's objects on the stack
+/// lie below the caller's frame, where ParallelEdges::join() forgets them; otherwise inlined away.
+template <class F>
+#ifdef FP_TSAN_ANNOTATE
+[[gnu::noinline]]
+#endif
+decltype(auto)
+outOfLine(const F& f) {
+  return f();
+}
 
 /// calls leave() of `edges` on scope exit (a body that throws too)
 struct Leave {
@@ -106,7 +153,8 @@ template <class Range, class Body>
 void parallelFor(const Range& range, const Body& body) {
   detail::ParallelEdges edges;
   edges.spawn();
-  tbb::parallel_for(range, [&](const Range& r) { detail::within<void>(edges, body, r); });
+  detail::outOfLine(
+      [&] { tbb::parallel_for(range, [&](const Range& r) { detail::within<void>(edges, body, r); }); });
   edges.join();
 }
 
@@ -115,7 +163,8 @@ template <class Index, class Body>
 void parallelFor(Index first, Index last, const Body& body) {
   detail::ParallelEdges edges;
   edges.spawn();
-  tbb::parallel_for(first, last, [&](Index i) { detail::within<void>(edges, body, i); });
+  detail::outOfLine(
+      [&] { tbb::parallel_for(first, last, [&](Index i) { detail::within<void>(edges, body, i); }); });
   edges.join();
 }
 
@@ -124,12 +173,19 @@ template <class Range, class Value, class Body, class Join>
 Value parallelReduce(const Range& range, const Value& identity, const Body& body, const Join& join) {
   detail::ParallelEdges edges;
   edges.spawn();
-  Value result = tbb::parallel_reduce(
-      range, identity,
-      [&](const Range& r, const Value& acc) -> Value { return detail::within<Value>(edges, body, r, acc); },
-      [&](const Value& a, const Value& b) -> Value { return detail::withinJoin<Value>(edges, join, a, b); });
+  using C = detail::Carried<Value>;
+  const C result = detail::outOfLine([&] {
+    return tbb::parallel_reduce(
+        range, C{identity},
+        [&](const Range& r, const C& acc) -> C {
+          return C{detail::within<Value>(edges, body, r, acc.value)};
+        },
+        [&](const C& a, const C& b) -> C {
+          return C{detail::withinJoin<Value>(edges, join, a.value, b.value)};
+        });
+  });
   edges.join();
-  return result;
+  return result.value;
 }
 
 /// tbb::parallel_deterministic_reduce(range, identity, body, join): the same split and join order for every
@@ -139,12 +195,19 @@ Value parallelDeterministicReduce(const Range& range, const Value& identity, con
                                   const Join& join) {
   detail::ParallelEdges edges;
   edges.spawn();
-  Value result = tbb::parallel_deterministic_reduce(
-      range, identity,
-      [&](const Range& r, const Value& acc) -> Value { return detail::within<Value>(edges, body, r, acc); },
-      [&](const Value& a, const Value& b) -> Value { return detail::withinJoin<Value>(edges, join, a, b); });
+  using C = detail::Carried<Value>;
+  const C result = detail::outOfLine([&] {
+    return tbb::parallel_deterministic_reduce(
+        range, C{identity},
+        [&](const Range& r, const C& acc) -> C {
+          return C{detail::within<Value>(edges, body, r, acc.value)};
+        },
+        [&](const C& a, const C& b) -> C {
+          return C{detail::withinJoin<Value>(edges, join, a.value, b.value)};
+        });
+  });
   edges.join();
-  return result;
+  return result.value;
 }
 
 /// tbb::parallel_sort(first, last). Under ThreadSanitizer a sequential std::sort: TBB's quick sort moves
@@ -172,7 +235,7 @@ class TaskGroup {
     });
   }
   void wait() {
-    m_group.wait();
+    detail::outOfLine([&] { m_group.wait(); });
     m_edges.join();
   }
 
