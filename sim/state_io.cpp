@@ -104,7 +104,9 @@ class Reader {
     static_assert(kRawBytes<T>);
     std::vector<T> values{};
     values.resize(std::size_t(count));
-    std::memcpy(static_cast<void*>(values.data()), m_bytes.data() + m_pos, std::size_t(count) * sizeof(T));
+    if (count >
+        0)  // an empty vector's data() may be null, and memcpy's pointers must not be even for 0 bytes
+      std::memcpy(static_cast<void*>(values.data()), m_bytes.data() + m_pos, std::size_t(count) * sizeof(T));
     m_pos += std::size_t(count) * sizeof(T);
     return values;
   }

@@ -168,6 +168,27 @@ TEST(StateIoErrors, CorruptMagicVersionHashAndBytes) {
   expectRefused(std::string(), target, "bad magic");
 }
 
+TEST(StateIoErrors, AnEmptyArrayIsReadWithoutCopyingFromNull) {
+  // found by fuzz_state (session 6): a count of 0 made the reader memcpy into an empty vector's null data(),
+  // undefined behaviour that the ASan+UBSan stage turns into a failure. The parameters' count follows the
+  // header: magic, version, scene hash, mode, time, step size, step counter, boundary impulse.
+  Saved& s = saved();
+  sim::Simulation target(s.scene);
+  const std::size_t at = 8 + 4 + 8 + 4 + 8 + sizeof(sim::Real) + 8 + 3 * 8;
+  std::uint64_t count = 0;
+  std::memcpy(&count, s.bytes.data() + at, sizeof(count));
+  ASSERT_GT(count, 20u) << "the layout moved: update the offset of the parameters' count";
+  ASSERT_LT(count, 1000u) << "the layout moved: update the offset of the parameters' count";
+  std::string bad = s.bytes;
+  std::memset(bad.data() + at, 0, sizeof(count));
+  try {
+    sim::decodeState(bad, target, false);
+    ADD_FAILURE() << "accepted a state without parameters";
+  } catch (const sim::StateError& e) {
+    EXPECT_NE(std::string(e.what()).find("0 parameter values"), std::string::npos) << e.what();
+  }
+}
+
 TEST(StateIoErrors, AnotherSceneIsRefused) {
   Saved& s = saved();
   sim::SceneDesc other = s.scene;
