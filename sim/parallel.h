@@ -168,24 +168,30 @@ void parallelFor(Index first, Index last, const Body& body) {
   edges.join();
 }
 
-/// tbb::parallel_reduce(range, identity, body, join)
-template <class Range, class Value, class Body, class Join>
-Value parallelReduce(const Range& range, const Value& identity, const Body& body, const Join& join) {
-  detail::ParallelEdges edges;
+namespace detail {
+/// a reduction through `reduce` (tbb::parallel_reduce or tbb::parallel_deterministic_reduce) with the edges
+template <class Reduce, class Range, class Value, class Body, class Join>
+Value reduceWithEdges(const Reduce& reduce, const Range& range, const Value& identity, const Body& body,
+                      const Join& join) {
+  ParallelEdges edges;
   edges.spawn();
-  using C = detail::Carried<Value>;
-  const C result = detail::outOfLine([&] {
-    return tbb::parallel_reduce(
+  using C = Carried<Value>;
+  const C result = outOfLine([&] {
+    return reduce(
         range, C{identity},
-        [&](const Range& r, const C& acc) -> C {
-          return C{detail::within<Value>(edges, body, r, acc.value)};
-        },
-        [&](const C& a, const C& b) -> C {
-          return C{detail::withinJoin<Value>(edges, join, a.value, b.value)};
-        });
+        [&](const Range& r, const C& acc) -> C { return C{within<Value>(edges, body, r, acc.value)}; },
+        [&](const C& a, const C& b) -> C { return C{withinJoin<Value>(edges, join, a.value, b.value)}; });
   });
   edges.join();
   return result.value;
+}
+}  // namespace detail
+
+/// tbb::parallel_reduce(range, identity, body, join)
+template <class Range, class Value, class Body, class Join>
+Value parallelReduce(const Range& range, const Value& identity, const Body& body, const Join& join) {
+  return detail::reduceWithEdges([](const auto&... args) { return tbb::parallel_reduce(args...); }, range,
+                                 identity, body, join);
 }
 
 /// tbb::parallel_deterministic_reduce(range, identity, body, join): the same split and join order for every
@@ -193,21 +199,9 @@ Value parallelReduce(const Range& range, const Value& identity, const Body& body
 template <class Range, class Value, class Body, class Join>
 Value parallelDeterministicReduce(const Range& range, const Value& identity, const Body& body,
                                   const Join& join) {
-  detail::ParallelEdges edges;
-  edges.spawn();
-  using C = detail::Carried<Value>;
-  const C result = detail::outOfLine([&] {
-    return tbb::parallel_deterministic_reduce(
-        range, C{identity},
-        [&](const Range& r, const C& acc) -> C {
-          return C{detail::within<Value>(edges, body, r, acc.value)};
-        },
-        [&](const C& a, const C& b) -> C {
-          return C{detail::withinJoin<Value>(edges, join, a.value, b.value)};
-        });
-  });
-  edges.join();
-  return result.value;
+  return detail::reduceWithEdges(
+      [](const auto&... args) { return tbb::parallel_deterministic_reduce(args...); }, range, identity, body,
+      join);
 }
 
 /// tbb::parallel_sort(first, last). Under ThreadSanitizer a sequential std::sort: TBB's quick sort moves
