@@ -109,6 +109,24 @@ Simulation::Simulation(const SceneDesc& scene) : m_scene(scene), m_params(scene.
   if (m_scene.colliders.size() > std::numeric_limits<std::uint16_t>::max()) {
     throw InputError(scene.name + ": too many colliders");
   }
+  // A scene built in code can carry garbage (an Eigen vector initialised with `{}` is not zeroed): a
+  // non-finite number would surface steps later as an instability far from its cause.
+  for (std::size_t b = 0; b < m_scene.fluid.size(); ++b) {
+    const FluidBlock& block = m_scene.fluid[b];
+    if (!block.box.min().allFinite() || !block.box.max().allFinite() || !block.velocity.allFinite()) {
+      throw InputError(scene.name + ": fluid block " + std::to_string(b) +
+                       " has a non-finite box or velocity");
+    }
+  }
+  for (const ColliderDesc& c : m_scene.colliders) {
+    const bool finite = c.halfExtents.allFinite() && std::isfinite(c.radius) && std::isfinite(c.halfLength) &&
+                        std::isfinite(c.headroom) && c.position.allFinite() &&
+                        c.orientation.coeffs().allFinite() && c.linearVelocity.allFinite() &&
+                        c.angularVelocity.allFinite();
+    if (!finite) {
+      throw InputError(scene.name + ": collider '" + c.name + "' has a non-finite size, pose or velocity");
+    }
+  }
   const Real r = Real(m_params.particleRadius);
   m_support = Real(4) * r;
   for (const ColliderDesc& c : m_scene.colliders) {

@@ -34,7 +34,10 @@ fp::sim::SceneDesc tinyScene() {
   hand.position = fp::sim::Vec3d(0, 0.16, 0);
   hand.driven = true;
   s.colliders.push_back(hand);
-  s.fluid.push_back({fp::sim::Aabb(fp::sim::Vec3d(-0.12, 0, -0.08), fp::sim::Vec3d(0.12, 0.1, 0.08)), {}});
+  // (the velocity keeps its default of zero: `{}` for an Eigen vector would leave it uninitialised)
+  fp::sim::FluidBlock block;
+  block.box = fp::sim::Aabb(fp::sim::Vec3d(-0.12, 0, -0.08), fp::sim::Vec3d(0.12, 0.1, 0.08));
+  s.fluid.push_back(block);
   s.domain = fp::sim::Aabb(fp::sim::Vec3d(-0.2, -0.05, -0.15), fp::sim::Vec3d(0.2, 0.3, 0.15));
   return s;
 }
