@@ -1,7 +1,7 @@
 #pragma once
 // The scenes of issue 14's look tests, from particle states exported by the simulation (tests/gl/data/):
 //   hand_tank_rest_*.ply   assets/scenes/hand_tank.json, no hand, frame 90 (1.5 s), M = uniform-high or
-//                          fluidplaying, DIR/frame_00090.ply of (the same bytes for any --threads)
+//                          fluidplaying: DIR/frame_00090.ply (the same bytes for any --threads) of
 //     fluidplaying --headless --scene assets/scenes/hand_tank.json --mode M --frames 90 --export DIR
 //   propeller_moving.ply   assets/scenes/propeller.json, fluidplaying, frame 60 (1 s): fine and coarse
 //                          particles stirred by the propeller
