@@ -216,6 +216,8 @@ void FluidRenderer::Impl::filterDepth(const ViewParams& v) {
     depthUp.set("uFiltered", 1);
     depthUp.set("uRange", s.filterRange);
     depthUp.set("uFineRadius", fineRadius);
+    // a pixel 4 fine radii behind the filtered surface around it looks through a gap between its spheres
+    depthUp.set("uHoleDepth", s.fillHoles ? 4.0f : 0.0f);
     glBindFramebuffer(GL_FRAMEBUFFER, filterFbo[1].id);
     glBindTexture(GL_TEXTURE_2D, fluidDepth[0].id);
     glActiveTexture(GL_TEXTURE1);
@@ -237,6 +239,7 @@ void FluidRenderer::Impl::drawComposite(const ViewParams& v) {
   composite.set("uInvView", v.invView);
   composite.set("uAbsorption", s.absorption);
   composite.set("uRefraction", s.refraction);
+  composite.set("uFineRadius", fineRadius);
   composite.set("uHighlightDensity", s.highlightStrength / std::max(maxRadius, 1e-6f));
   composite.set("uThicknessInBA", int(smoothedThickness));
   const GLuint inputs[4] = {sceneColor.id, sceneDepth.id, fluidDepth[surface].id,

@@ -26,7 +26,7 @@ RenderSettingsTable::RenderSettingsTable() : sim::ParamTableOf<RenderSettings>("
   add("filter_iterations", "water", "-", 0, 10, true,
       "narrow-range filter passes (each horizontal + vertical)", &R::filterIterations, 2);
   add("filter_radius", "water", "r", 0.1, 20.0, true, "filter half-width in fine particle radii",
-      &R::filterRadius, 4.0f);
+      &R::filterRadius, 5.0f);
   add("filter_max_pixels", "water", "px", 1.0, 256.0, true, "cap on the filter half-width",
       &R::filterMaxPixels, 64.0f);
   add("filter_range", "water", "r", 0.1, 20.0, true, "depth range kept by the filter in fine particle radii",

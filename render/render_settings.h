@@ -39,7 +39,10 @@ struct RenderSettings {
   ColorRange colorRange;  ///< particle view range when autoRange is off
   Eigen::Vector3f absorption{2.2f, 0.55f, 0.3f};  ///< Beer-Lambert coefficient per channel [1/m]
   int filterMaxTaps = 12;  ///< most sample pairs a pixel and filter pass; a wider filter strides, >= 1
-  bool profile = false;    ///< finish each pass and time it (slower; for the benchmark)
+  /// fill the pinholes of the surface: a gap between spheres through which a pixel sees water far behind
+  /// (or nothing) takes the filtered surface around it (at half resolution only)
+  bool fillHoles = true;
+  bool profile = false;  ///< finish each pass and time it (slower; for the benchmark)
 };
 
 /// The table of the render settings, immutable. For the command line:

@@ -209,6 +209,8 @@ run_fuzzers() {
   done
   cmake --build build-fuzz -j"${JOBS}" --target "${targets[@]}" || die "the fuzz build failed"
   local status=0
+  # the state seed must match today's format and the target's scene, or the fuzzer only mutates a header
+  FP_FUZZ_CHECK_SEED=tests/fuzz/state/seed.bin build-fuzz/tests/fuzz/fuzz_state || status=1
   for name in "${FUZZ_TARGETS[@]}"; do
     section "Fuzz: fuzz_${name} (${FUZZ_SECONDS:-30} s)"
     mkdir -p "build-fuzz/corpus/${name}"

@@ -13,6 +13,7 @@ uniform mat4 uProj;
 uniform mat4 uInvView;
 uniform vec3 uAbsorption;       // [1/m]
 uniform float uRefraction;      // offset at full thickness [uv]
+uniform float uFineRadius;      // [m]
 uniform float uHighlightDensity;  // [1/m]
 out vec4 fColor;
 
@@ -56,8 +57,8 @@ void main() {
   vec2 uv = (vec2(p) + 0.5) / vec2(gSize);
   vec4 t4 = textureLod(uThickness, uv, 0.0);
   vec2 thickness = uThicknessInBA ? t4.zw : t4.xy;
-  float radius = fluid.y;
-  vec2 refracted = uv - n.xy * uRefraction * (1.0 - exp(-thickness.x / (8.0 * radius)));
+  // the offset saturates over 8 fine radii of water, whatever the size of the particle in front
+  vec2 refracted = uv - n.xy * uRefraction * (1.0 - exp(-thickness.x / (8.0 * uFineRadius)));
   vec3 behind = textureLod(uSceneColor, clamp(refracted, vec2(0.0), vec2(1.0)), 0.0).rgb;
   vec3 transmitted = exp(-uAbsorption * thickness.x);
   vec3 deep = vec3(0.02, 0.16, 0.24);  // light scattered back by deep water

@@ -243,6 +243,9 @@ void NeighborSearch::buildLists(const UniformGrid& grid, const std::vector<Vec3>
     };
     const std::size_t i0 = chunk * kChunk;
     const std::size_t i1 = std::min(n, i0 + kChunk);
+    // squared slab distances of the query's reach, per cell along each axis (computed once per query and
+    // source instead of once per row or per trimmed cell)
+    std::vector<Real> slab2;
     for (std::size_t i = i0; i < i1; ++i) {
       const Vec3 xi = qx[i];
       const Real Hi = qH[i];
@@ -283,15 +286,39 @@ void NeighborSearch::buildLists(const UniformGrid& grid, const std::vector<Vec3>
           z1 = std::min(dims.z() - 1, floorCell((xi.z() + w - origin.z()) * invCell));
         }
         const bool windowed = x0 >= c.x() - windowReach && x1 <= c.x() + windowReach;
+        // dx^2 of cells x0..x1, dy^2 of y0..y1, dz^2 of z0..z1 (the same expressions as a per-row
+        // evaluation: only which candidates are tested depends on them, never the lists)
+        const std::size_t spanX = std::size_t(x1 - x0 + 1);
+        const std::size_t spanY = std::size_t(std::max(0, y1 - y0 + 1));
+        const std::size_t spanZ = std::size_t(std::max(0, z1 - z0 + 1));
+        if (slab2.size() < spanX + spanY + spanZ)
+          slab2.resize(spanX + spanY + spanZ);
+        Real* const dx2 = slab2.data() - x0;
+        Real* const dy2 = slab2.data() + spanX - y0;
+        Real* const dz2 = slab2.data() + spanX + spanY - z0;
+        for (int cx = x0; cx <= x1; ++cx) {
+          const Real d = slabDistance(xi.x(), origin.x() + Real(cx) * cell, cell, margin);
+          dx2[cx] = d * d;
+        }
+        for (int cy = y0; cy <= y1; ++cy) {
+          const Real d = slabDistance(xi.y(), origin.y() + Real(cy) * cell, cell, margin);
+          dy2[cy] = d * d;
+        }
         for (int cz = z0; cz <= z1; ++cz) {
-          const Real dz = slabDistance(xi.z(), origin.z() + Real(cz) * cell, cell, margin);
+          const Real d = slabDistance(xi.z(), origin.z() + Real(cz) * cell, cell, margin);
+          dz2[cz] = d * d;
+        }
+        for (int cz = z0; cz <= z1; ++cz) {
+          const Real dzz = dz2[cz];
+          if (dzz >= hMax2)
+            continue;
+          const std::uint32_t* rowOffsets = ranges.data() + 2 + std::uint32_t(cz * dims.y());
           for (int cy = y0; cy <= y1; ++cy) {
-            const Real dy = slabDistance(xi.y(), origin.y() + Real(cy) * cell, cell, margin);
-            const Real dyz2 = dy * dy + dz * dz;
+            const Real dyz2 = dy2[cy] + dzz;
             if (dyz2 >= hMax2)
               continue;
             // a row with no point at all costs one load
-            const std::uint32_t rowBase = ranges.rowOffset(std::uint32_t(cz * dims.y() + cy));
+            const std::uint32_t rowBase = rowOffsets[cy];
             if (rowBase == 0)
               continue;
             // a row whose largest support within the reach cannot reach i costs one more
@@ -305,13 +332,16 @@ void NeighborSearch::buildLists(const UniformGrid& grid, const std::vector<Vec3>
             const std::uint32_t* start = ranges.data() + rowBase;
             if (start[x0] == start[x1 + 1])
               continue;
-            // the cells of the row that the largest support reaches
-            const Real w = std::sqrt(hMax2 - dyz2) + margin;
-            const int rx0 = std::max(x0, floorCell((xi.x() - w - origin.x()) * invCell));
-            const int rx1 = std::min(x1, floorCell((xi.x() + w - origin.x()) * invCell));
-            if (rx0 > rx1)
-              continue;
             if (!src.H) {
+              // the cells of the row that the support reaches
+              int rx0 = x0;
+              int rx1 = x1;
+              while (rx0 <= rx1 && dx2[rx0] + dyz2 >= hMax2)
+                ++rx0;
+              while (rx1 > rx0 && dx2[rx1] + dyz2 >= hMax2)
+                --rx1;
+              if (rx0 > rx1)
+                continue;
               // cells rx0..rx1 of one row are contiguous in the sorted arrays
               const std::uint32_t b = start[rx0];
               const std::uint32_t e = start[rx1 + 1];
@@ -337,12 +367,11 @@ void NeighborSearch::buildLists(const UniformGrid& grid, const std::vector<Vec3>
             // trimmed range are scanned whole; empty cells have no points to scan.)
             const Real* cellMax = m_cellMaxH[std::size_t(s)].data() + rowBase;
             auto reaches = [&](int cx) {
-              const Real hc = Real(0.5) * (Hi + cellMax[cx]);
-              const Real dx = slabDistance(xi.x(), origin.x() + Real(cx) * cell, cell, margin);
-              return dx * dx + dyz2 < hc * hc;
+              const Real hc = std::min(hMax, Real(0.5) * (Hi + cellMax[cx]));
+              return dx2[cx] + dyz2 < hc * hc;
             };
-            int cx0 = rx0;
-            int cx1 = rx1;
+            int cx0 = x0;
+            int cx1 = x1;
             while (cx0 <= cx1 && !reaches(cx0))
               ++cx0;
             while (cx1 > cx0 && !reaches(cx1))
