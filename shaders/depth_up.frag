@@ -4,9 +4,9 @@
 // pixel's own sphere depth. The outline of the water stays the full-resolution one: a pixel without a sphere
 // stays empty, and one whose neighbourhood holds no such texel keeps its own depth. Pinholes excepted: a
 // pixel that looks through a gap between the spheres of the surface (it sees water more than uHoleDepth fine
-// radii behind all four texels around it, or nothing while spheres surround it) takes the filtered surface;
-// left as they were, a few such pixels turned normals by 60-90 degrees and doubled the rms angle of a
-// resting surface made of particles of two sizes.
+// radii behind all four texels around it) takes the filtered surface; left as they were, a few such pixels
+// turned normals by 60-90 degrees and doubled the rms angle of a resting surface made of particles of two
+// sizes. (Gaps that show no water at all are left: filling them changed no figure.)
 in vec2 vUv;
 uniform sampler2D uDepth;     // full resolution, RG: eye depth [m] (0: no fluid), particle radius [m]
 uniform sampler2D uFiltered;  // half resolution, filtered, same layout
@@ -15,28 +15,19 @@ uniform float uFineRadius;    // [m]
 uniform float uHoleDepth;     // in fine radii; 0: no hole is filled
 out vec2 fDepth;
 
-bool water(ivec2 p, ivec2 last) {
-  return texelFetch(uDepth, clamp(p, ivec2(0), last), 0).x > 0.0;
-}
-
 void main() {
   ivec2 p = ivec2(gl_FragCoord.xy);
   vec2 c = texelFetch(uDepth, p, 0).xy;
   if (c.x <= 0.0) {
-    ivec2 full = textureSize(uDepth, 0) - 1;
-    bool enclosed = uHoleDepth > 0.0 && water(p + ivec2(1, 0), full) && water(p - ivec2(1, 0), full) &&
-                    water(p + ivec2(0, 1), full) && water(p - ivec2(0, 1), full);
-    if (!enclosed) {
-      fDepth = c;
-      return;
-    }
+    fDepth = c;
+    return;
   }
   ivec2 last = textureSize(uFiltered, 0) - 1;
   // this pixel's centre in half-resolution texel coordinates: texel i covers pixels 2i and 2i + 1
   vec2 t = (vec2(p) + 0.5) * 0.5 - 0.5;
   ivec2 i0 = ivec2(floor(t));
   vec2 f = t - vec2(i0);
-  float w0 = c.x > 0.0 ? 1.0 / c.x : 0.0;
+  float w0 = 1.0 / c.x;
   float range = uRange * uFineRadius * w0 * w0;
   float sum = 0.0;
   float weights = 0.0;
@@ -64,8 +55,7 @@ void main() {
       weights += w;
     }
   }
-  bool hole = uHoleDepth > 0.0 && texels == 4 &&
-              (c.x <= 0.0 || c.x - 1.0 / farthest > uHoleDepth * uFineRadius);
+  bool hole = uHoleDepth > 0.0 && texels == 4 && c.x - 1.0 / farthest > uHoleDepth * uFineRadius;
   if (hole)
     fDepth = vec2(weightsAll / sumAll, radius);
   else

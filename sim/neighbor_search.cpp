@@ -479,24 +479,31 @@ void NeighborSearch::buildSymmetric(const UniformGrid& grid, const std::vector<V
   using Range = tbb::blocked_range<std::size_t>;
   const std::size_t n = x.size();
   const std::size_t nChunks = (n + kChunk - 1) / kChunk;
+  // room for the whole lists of the last build, so that widening the own lists below seldom reallocates
+  if (out.indices.capacity() < m_lastTotal)
+    out.indices.reserve(m_lastTotal + m_lastTotal / 16);
   // A fine point next to coarse ones otherwise searches as far as the coarsest pair support, twice its own
   // in the adaptive modes; here it searches as far as its own, and the pairs with larger points come from
-  // theirs (a pair is within reach of the larger point's support).
-  buildLists(grid, x, H, {GridPoints{x.data(), H.data(), 0, &cells, 0}}, 0, maxH, m_own, true);
-  const std::uint32_t* ownOff = m_own.offsets.data();
-  const std::uint32_t* own = m_own.indices.data();
+  // theirs (a pair is within reach of the larger point's support). The own lists are written straight into
+  // `out` and then widened in place: no second copy of the lists.
+  buildLists(grid, x, H, {GridPoints{x.data(), H.data(), 0, &cells, 0}}, 0, maxH, out, true);
+  m_ownOffsets.swap(out.offsets);
+  const std::uint32_t* ownOff = m_ownOffsets.data();
   const Real* h = H.data();
   // how many larger points hand each point a pair (counts: the same whatever the order of the increments)
   m_received.assign(n, 0);
   std::uint32_t* received = m_received.data();
-  parallelFor(Range(0, n, 256), [&](const Range& r) {
-    for (std::size_t i = r.begin(); i < r.end(); ++i) {
-      for (std::uint32_t k = ownOff[i]; k < ownOff[i + 1]; ++k) {
-        if (h[own[k]] < h[i])
-          __atomic_fetch_add(&received[own[k]], 1u, __ATOMIC_RELAXED);
+  {
+    const std::uint32_t* own = out.indices.data();
+    parallelFor(Range(0, n, 256), [&](const Range& r) {
+      for (std::size_t i = r.begin(); i < r.end(); ++i) {
+        for (std::uint32_t k = ownOff[i]; k < ownOff[i + 1]; ++k) {
+          if (h[own[k]] < h[i])
+            __atomic_fetch_add(&received[own[k]], 1u, __ATOMIC_RELAXED);
+        }
       }
-    }
-  });
+    });
+  }
   // i's list starts after the lists of the points before it: a prefix sum, per chunk and over chunks
   m_chunkPairs.assign(nChunks + 1, 0);
   parallelFor(Range(0, nChunks, 1), [&](const Range& cr) {
@@ -509,33 +516,60 @@ void NeighborSearch::buildSymmetric(const UniformGrid& grid, const std::vector<V
   });
   for (std::size_t chunk = 0; chunk < nChunks; ++chunk)
     m_chunkPairs[chunk + 1] += m_chunkPairs[chunk];
+  const std::size_t total = ownOff[n] + m_chunkPairs[nChunks];
+  m_lastTotal = total;
   out.offsets.resize(n + 1);
-  out.offsets[n] = std::uint32_t(ownOff[n] + m_chunkPairs[nChunks]);
-  const std::size_t total = out.offsets[n];
-  if (out.indices.capacity() < total || out.indices.capacity() > 2 * (total + total / 16)) {
-    std::vector<std::uint32_t> fitted;
-    fitted.reserve(total + total / 16);
-    out.indices.swap(fitted);
-  }
-  out.indices.resize(total);
-  std::uint32_t* dst = out.indices.data();
-  // own list first; `received` becomes where i's next received pair goes
   parallelFor(Range(0, nChunks, 1), [&](const Range& cr) {
     for (std::size_t chunk = cr.begin(); chunk < cr.end(); ++chunk) {
       std::size_t before = m_chunkPairs[chunk];
       for (std::size_t i = chunk * kChunk; i < std::min(n, (chunk + 1) * kChunk); ++i) {
-        const std::uint32_t first = std::uint32_t(ownOff[i] + before);
-        out.offsets[i] = first;
+        out.offsets[i] = std::uint32_t(ownOff[i] + before);
         before += received[i];
-        std::copy(own + ownOff[i], own + ownOff[i + 1], dst + first);
-        received[i] = first + (ownOff[i + 1] - ownOff[i]);
       }
     }
   });
+  out.offsets[n] = std::uint32_t(total);
+  if (out.indices.capacity() > 2 * (total + total / 16)) {
+    std::vector<std::uint32_t> fitted;
+    fitted.reserve(total + total / 16);
+    fitted.assign(out.indices.begin(), out.indices.end());
+    out.indices.swap(fitted);
+  }
+  out.indices.resize(total);
+  std::uint32_t* dst = out.indices.data();
+  // Widen in place. First each chunk's own lists move, as one block, to the end of the chunk's final range,
+  // last chunk first (every block moves right, and only into room that no later chunk uses any more) ...
+  for (std::size_t chunk = nChunks; chunk-- > 0;) {
+    const std::size_t i0 = chunk * kChunk;
+    const std::size_t i1 = std::min(n, i0 + kChunk);
+    const std::size_t length = ownOff[i1] - ownOff[i0];
+    const std::size_t to = out.offsets[i1] - length;
+    if (length > 0 && to != ownOff[i0])
+      std::memmove(dst + to, dst + ownOff[i0], length * sizeof(std::uint32_t));
+  }
+  // ... then, chunk by chunk in parallel, each own list moves left to its final start (front to back, so no
+  // list is overwritten before it moves); `received` becomes where i's next received pair goes
+  parallelFor(Range(0, nChunks, 1), [&](const Range& cr) {
+    for (std::size_t chunk = cr.begin(); chunk < cr.end(); ++chunk) {
+      const std::size_t i0 = chunk * kChunk;
+      const std::size_t i1 = std::min(n, i0 + kChunk);
+      const std::size_t block = out.offsets[i1] - (ownOff[i1] - ownOff[i0]);
+      for (std::size_t i = i0; i < i1; ++i) {
+        const std::size_t from = block + (ownOff[i] - ownOff[i0]);
+        const std::uint32_t a = ownOff[i + 1] - ownOff[i];
+        if (a > 0 && from != out.offsets[i])
+          std::memmove(dst + out.offsets[i], dst + from, a * sizeof(std::uint32_t));
+        received[i] = out.offsets[i] + a;
+      }
+    }
+  });
+  // the pairs with larger points, read from the own lists in their final places, written after them
   parallelFor(Range(0, n, 256), [&](const Range& r) {
     for (std::size_t i = r.begin(); i < r.end(); ++i) {
-      for (std::uint32_t k = ownOff[i]; k < ownOff[i + 1]; ++k) {
-        const std::uint32_t j = own[k];
+      const std::uint32_t first = out.offsets[i];
+      const std::uint32_t last = first + (ownOff[i + 1] - ownOff[i]);
+      for (std::uint32_t k = first; k < last; ++k) {
+        const std::uint32_t j = dst[k];
         if (h[j] < h[i])
           dst[__atomic_fetch_add(&received[j], 1u, __ATOMIC_RELAXED)] = std::uint32_t(i);
       }

@@ -127,7 +127,7 @@ class NeighborSearch {
       bytes += c.capacity() * sizeof(Real);
     for (const std::vector<Real>& c : m_windowMaxH)
       bytes += c.capacity() * sizeof(Real);
-    return bytes + m_own.memoryBytes() + m_received.capacity() * sizeof(std::uint32_t) +
+    return bytes + (m_ownOffsets.capacity() + m_received.capacity()) * sizeof(std::uint32_t) +
            m_chunkPairs.capacity() * sizeof(std::size_t);
   }
 
@@ -142,8 +142,10 @@ class NeighborSearch {
   std::vector<std::vector<Real>> m_cellMaxH;
   // the same, largest over a window of cells along x
   std::vector<std::vector<Real>> m_windowMaxH;
-  // buildSymmetric: each point's neighbours no larger than itself
-  NeighborList m_own;
+  // buildSymmetric: where each point's own list (its neighbours no larger than itself) was written
+  std::vector<std::uint32_t> m_ownOffsets;
+  // buildSymmetric: the size of the last lists (the next build's room)
+  std::size_t m_lastTotal = 0;
   // buildSymmetric: pairs each point receives from larger points, then where the next one goes
   std::vector<std::uint32_t> m_received;
   // buildSymmetric: pairs received by the points of the chunks before each chunk

@@ -58,6 +58,7 @@ void SplashGenerator::searchNeighbors(const ParticleSet& p, const BoundarySet& b
     minH = std::min(minH, h);
     maxH = std::max(maxH, h);
   }
+  const Real fluidMaxH = maxH;
   if (nb > 0)
     maxH = std::max(maxH, boundary.support());
   const Vec3d extent = domain.sizes().array() + 2.0 * double(minH);
@@ -85,7 +86,10 @@ void SplashGenerator::searchNeighbors(const ParticleSet& p, const BoundarySet& b
     }
   });
   const GridPoints fluidSrc{m_sorted.x.data(), m_sorted.H.data(), 0, &m_fluidCells, 0};
-  m_search.build(m_grid, m_sorted.x, m_sorted.H, {fluidSrc}, 0, maxH, m_fluidNbrs);
+  if (minH < fluidMaxH)  // mixed sizes: each particle searches only as far as its own support (same lists)
+    m_search.buildSymmetric(m_grid, m_sorted.x, m_sorted.H, m_fluidCells, fluidMaxH, m_fluidNbrs);
+  else
+    m_search.build(m_grid, m_sorted.x, m_sorted.H, {fluidSrc}, 0, maxH, m_fluidNbrs);
 
   // boundary: all of it sorted at once (the simulation keeps its static part sorted, we cannot rely on it)
   m_grid.sort(boundary.x.data(), nb, m_boundaryOrder, m_boundaryCells);
