@@ -8,13 +8,13 @@
 #include <chrono>
 
 #include "engine/frame_capture.h"
+#include "engine/frame_splash.h"
 #include "engine/imgui_layer.h"
 #include "engine/key_map.h"
 #include "engine/panel.h"
 #include "engine/view_control.h"
 #include "render/fluid_renderer.h"
 #include "render/shader_program.h"
-#include "sim/splash.h"
 
 namespace fp::engine {
 
@@ -39,11 +39,7 @@ struct DesktopPlatform::Impl {
   std::unique_ptr<render::FluidRenderer> renderer;
   std::unique_ptr<ImGuiLayer> imgui;
   ViewControl view;
-  sim::SplashGenerator splash;
-  // the state the splash was generated from: a paused simulation keeps its splash, not one a frame
-  const sim::Simulation* splashOf = nullptr;
-  std::uint64_t splashStep = ~0ull;
-  double splashTime = -1.0;
+  FrameSplash splash;  // a paused simulation keeps its splash, not one a frame
   PanelState panel;
   FrameCapture frames;
   FrameTiming timing;
@@ -140,14 +136,7 @@ void DesktopPlatform::capture(AppSession& session, int frame) {
   m->view.frameScene(session, float(fbw) / float(std::max(fbh, 1)));
   render::SpraySpan spray;
   if (m->renderer->settings().showSpray) {
-    if (m->splashOf != &simulation || m->splashStep != simulation.stepCount() ||
-        m->splashTime != simulation.time()) {
-      m->splash.generate(simulation, std::uint64_t(frame));
-      m->splashOf = &simulation;
-      m->splashStep = simulation.stepCount();
-      m->splashTime = simulation.time();
-    }
-    const sim::SplashParticles& s = m->splash.splash();
+    const sim::SplashParticles& s = m->splash.of(simulation, std::uint64_t(frame));
     spray = render::SpraySpan{s.x.data(), s.radius.data(), s.size()};
   }
   m->renderer->update(render::frameDataOf(simulation, spray));

@@ -5,13 +5,16 @@
 // spray).
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <memory>
 #include <sstream>
 
+#include "engine/frame_splash.h"
 #include "engine/headless_render.h"
+#include "engine/headless_runner.h"
 #include "engine/scene_loader.h"
 #include "render/fluid_renderer.h"
 #include "render/image.h"
@@ -478,6 +481,58 @@ TEST(HeadlessRenderTest, ADamBreakFrameWithSplashHasSprayPixels) {
   EXPECT_EQ(changedPixels(disabled, without, 0).size(), 0u);
 }
 
+TEST(HeadlessRenderTest, StatisticsAndRendererShareOneSplashAFrame) {
+  // the run's statistics generate each frame's splash once and hand it to the frame callback (the renderer's)
+  engine::CliOptions o;
+  o.scenePath = std::string(FP_SOURCE_DIR) + "/assets/scenes/tiny_dam_break.json";
+  o.frames = 30;  // 0.5 s: the front has run up the far wall and sprays
+  o.threads = 1;
+  o.quiet = true;
+  std::ostringstream out, progress;
+  double sum = 0.0;
+  int calls = 0;
+  const engine::RunSummary summary =
+      engine::runHeadless(o, out, progress, [&](int, const sim::Simulation&, const sim::SplashParticles& sp) {
+        sum += double(sp.size());
+        ++calls;
+      });
+  EXPECT_EQ(calls, 31);  // frames 0 to 30
+  EXPECT_GT(sum, 0.0);
+  EXPECT_DOUBLE_EQ(summary.splashParticles, sum / double(calls));
+  // the renderer draws the splash it is handed, without generating its own
+  sim::Simulation simulation(engine::loadScene(o.scenePath));
+  sim::SplashParticles given;
+  for (int i = 0; i < 7; ++i) {
+    given.x.emplace_back(0.01f * float(i), 0.3f, 0.0f);
+    given.radius.push_back(0.004f);
+    given.source.push_back(0);
+  }
+  engine::CliOptions r;
+  r.outDir = (fs::path(::testing::TempDir()) / "fp_headless_given_splash").string();
+  r.width = kWidth;
+  r.height = kHeight;
+  engine::HeadlessRender render(r);
+  render.renderFrame(0, simulation, &given);
+  EXPECT_EQ(render.sprayCount(), 7u);
+}
+
+TEST(FrameSplashTest, APausedWindowKeepsItsSplash) {
+  // the window's splash (engine::FrameSplash): generated once a state, not once a frame while paused
+  sim::Simulation simulation(
+      engine::loadScene(std::string(FP_SOURCE_DIR) + "/assets/scenes/tiny_dam_break.json"));
+  engine::FrameSplash splash;
+  for (int frame = 0; frame < 5; ++frame)
+    splash.of(simulation, std::uint64_t(frame));  // paused: five frames drawn, the same state
+  EXPECT_EQ(splash.generations(), 1u);
+  simulation.step();
+  splash.of(simulation, 5);
+  splash.of(simulation, 6);
+  EXPECT_EQ(splash.generations(), 2u);
+  sim::Simulation other(engine::loadScene(std::string(FP_SOURCE_DIR) + "/assets/scenes/tiny_dam_break.json"));
+  splash.of(other, 7);  // another simulation (a reset or a new scene)
+  EXPECT_EQ(splash.generations(), 3u);
+}
+
 TEST(HeadlessRenderTest, WritesAVideoAtTheSceneFrameRate) {
   if (render::VideoWriter::findFfmpeg().empty())
     GTEST_SKIP() << "ffmpeg is not on PATH: no video to write";
@@ -493,4 +548,42 @@ TEST(HeadlessRenderTest, WritesAVideoAtTheSceneFrameRate) {
   EXPECT_EQ(WEXITSTATUS(status), 0);
   ASSERT_TRUE(fs::exists(video));
   EXPECT_GT(fs::file_size(video), 0u);
+  if (std::system("command -v ffprobe > /dev/null 2>&1") != 0)
+    GTEST_SKIP() << "ffprobe is not on PATH: frame count, size and rate not checked";
+  // frames 0 to 3 (the initial state and three frames), at the scene's 60 frames a second
+  std::string probe;
+  if (FILE* pipe = popen(("ffprobe -v error -count_frames -select_streams v:0 -show_entries "
+                          "stream=nb_read_frames,width,height,r_frame_rate -of csv=p=0 '" +
+                          video.string() + "'")
+                             .c_str(),
+                         "r")) {
+    char buffer[256];
+    while (std::fgets(buffer, sizeof(buffer), pipe))
+      probe += buffer;
+    pclose(pipe);
+  }
+  EXPECT_NE(probe.find("96,64,60/1,4"), std::string::npos) << probe;
+}
+
+TEST(HeadlessRenderTest, AVideoWithoutFfmpegIsAOneLineErrorBeforeAnySimulation) {
+  // PATH without ffmpeg: exit code 3 and one line naming ffmpeg, no frame simulated or written
+  const fs::path empty = fs::path(::testing::TempDir()) / "fp_headless_no_ffmpeg";
+  fs::remove_all(empty);
+  fs::create_directories(empty);
+  const std::string log = (empty / "log.txt").string();
+  const std::string scene = std::string(FP_SOURCE_DIR) + "/assets/scenes/tiny_dam_break.json";
+  const int status = std::system(
+      ("env -u DISPLAY PATH=" + empty.string() + " " + std::string(FP_FLUIDPLAYING_EXE) +
+       " --headless --render --threads 1 --scene " + scene + " --frames 3 --width 96 --height 64 --out " +
+       (empty / "png").string() + " --video " + (empty / "v.mp4").string() + " > " + log + " 2>&1")
+          .c_str());
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 3);
+  std::ifstream in(log);
+  std::stringstream text;
+  text << in.rdbuf();
+  EXPECT_NE(text.str().find("ffmpeg program is not on PATH"), std::string::npos) << text.str();
+  EXPECT_EQ(text.str().find("t = "), std::string::npos) << text.str();  // no progress line: nothing simulated
+  EXPECT_FALSE(fs::exists(empty / "png" / "frame_00000.png"));
+  EXPECT_FALSE(fs::exists(empty / "v.mp4"));
 }

@@ -1,5 +1,6 @@
 // The video writer (label gl, beside the image tests): a few frames through the ffmpeg program, checked
-// with ffprobe when it is there; a one-line error when ffmpeg is not on PATH.
+// with ffprobe when it is there; a one-line error when ffmpeg is not on PATH. The window's record toggle
+// (F8, the panel's "record video": engine::FrameCapture) on an OSMesa framebuffer.
 #include <gtest/gtest.h>
 
 #include <cstdio>
@@ -7,6 +8,12 @@
 #include <filesystem>
 #include <string>
 
+#include <optional>
+
+#include "engine/frame_capture.h"
+#include "engine/panel.h"
+#include "render/gl_api.h"
+#include "render/offscreen_context.h"
 #include "render/render_error.h"
 #include "render/video_writer.h"
 
@@ -41,6 +48,38 @@ std::string run(const std::string& command) {
     pclose(pipe);
   }
   return out;
+}
+
+/// Runs the test in `dir` (the window writes video_NNN.mp4 into the working directory) and goes back.
+class InDirectory {
+ public:
+  explicit InDirectory(const fs::path& dir) : m_saved(fs::current_path()) {
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    fs::current_path(dir);
+  }
+  ~InDirectory() { fs::current_path(m_saved); }
+  InDirectory(const InDirectory&) = delete;
+  InDirectory& operator=(const InDirectory&) = delete;
+
+ private:
+  fs::path m_saved;
+};
+
+/// `frames` frames of the window's view through its record toggle, then the toggle off; the panel's message
+std::string recordInWindow(engine::PanelState& panel, int frames) {
+  render::OffscreenContext context(64, 48);
+  engine::FrameCapture capture(engine::CliOptions(), std::nullopt, panel);
+  panel.recordVideo = true;  // F8 or the panel's "record video"
+  for (int f = 0; f < frames; ++f) {
+    glClearColor(0.1f * float(f), 0.5f, 0.2f, 1.0f);
+    glClear(GL_COLOR_BUFFER_BIT);
+    capture.sceneDrawn(panel, 64, 48, 30.0);
+  }
+  const bool recording = panel.recordVideo;
+  panel.recordVideo = false;
+  capture.sceneDrawn(panel, 64, 48, 30.0);
+  return (recording ? "" : "stopped: ") + panel.message;
 }
 
 }  // namespace
@@ -92,4 +131,42 @@ TEST(VideoWriterTest, MissingFfmpegIsAOneLineError) {
     EXPECT_NE(message.find("ffmpeg"), std::string::npos) << message;
     EXPECT_EQ(message.find('\n'), std::string::npos) << message;
   }
+}
+
+TEST(WindowVideoTest, TheRecordToggleWritesAVideoAtTheSceneFrameRate) {
+  if (render::VideoWriter::findFfmpeg().empty())
+    GTEST_SKIP() << "ffmpeg is not on PATH: no video to write";
+  const fs::path dir = fs::path(::testing::TempDir()) / "fp_window_video";
+  {
+    const InDirectory in(dir);
+    engine::PanelState panel;
+    EXPECT_EQ(recordInWindow(panel, 5), "video written to video_000.mp4");
+  }
+  const fs::path file = dir / "video_000.mp4";
+  ASSERT_TRUE(fs::exists(file));
+  if (run("command -v ffprobe").empty())
+    GTEST_SKIP() << "ffprobe is not on PATH: frame count and size not checked";
+  const std::string probe =
+      run("ffprobe -v error -count_frames -select_streams v:0 -show_entries "
+          "stream=nb_read_frames,width,height,r_frame_rate -of csv=p=0 '" +
+          file.string() + "'");
+  EXPECT_NE(probe.find("64,48,30/1,5"), std::string::npos) << probe;
+}
+
+TEST(WindowVideoTest, TheRecordToggleWithoutFfmpegStopsWithAOneLineMessage) {
+  const char* path = std::getenv("PATH");
+  const std::string saved = path ? path : "";
+  const fs::path dir = fs::path(::testing::TempDir()) / "fp_window_video_no_ffmpeg";
+  std::string message;
+  {
+    const InDirectory in(dir);
+    setenv("PATH", dir.c_str(), 1);
+    engine::PanelState panel;
+    message = recordInWindow(panel, 2);
+    setenv("PATH", saved.c_str(), 1);
+  }
+  EXPECT_EQ(message.rfind("stopped: ", 0), 0u) << message;  // the toggle turned itself off
+  EXPECT_NE(message.find("ffmpeg"), std::string::npos) << message;
+  EXPECT_EQ(message.find('\n'), std::string::npos) << message;
+  EXPECT_FALSE(fs::exists(dir / "video_000.mp4"));
 }

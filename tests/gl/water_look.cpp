@@ -171,12 +171,14 @@ int main(int argc, char** argv) {
     if (!pngDir.empty())
       render::writePng(pngDir + "/rest_coarsened.png", shot.image);
   }
-  for (const auto& [name, scene] : {std::make_pair("propeller fluidplaying", test::movingPropeller())}) {
+  for (const auto& [name, scene] : {std::make_pair("propeller", test::movingPropeller()),
+                                    std::make_pair("hand_tank_push", test::movingHandTank())}) {
     const test::LookShot shot = test::shoot(renderer, scene, width, height);
     const test::Creases c = test::measureCreases(shot.surface, 2, 20.0f, scene.fineRadius);
-    std::printf("moving %s: creases %.4f of %zu interior water px\n", name, c.fraction, c.interior);
+    std::printf("moving %s fluidplaying: creases %.4f of %zu interior water px\n", name, c.fraction,
+                c.interior);
     if (!pngDir.empty())
-      render::writePng(pngDir + "/moving_propeller.png", shot.image);
+      render::writePng(pngDir + "/moving_" + name + ".png", shot.image);
   }
   return 0;
 }

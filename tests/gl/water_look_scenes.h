@@ -5,6 +5,12 @@
 //     fluidplaying --headless --scene assets/scenes/hand_tank.json --mode M --frames 90 --export DIR
 //   propeller_moving.ply   assets/scenes/propeller.json, fluidplaying, frame 60 (1 s): fine and coarse
 //                          particles stirred by the propeller
+//   hand_tank_push_fluidplaying.ply   assets/scenes/hand_tank.json, fluidplaying, the recorded hand
+//                          assets/hands/push.csv pushing the water along +x, frame 40 (0.67 s):
+//                          DIR/frame_00040.ply of
+//     fluidplaying --headless --scene assets/scenes/hand_tank.json --mode fluidplaying
+//                  --hand-script assets/hands/push.csv --frames 40 --export DIR
+//                          (exported in session 7 from main 56f09fa; the hand itself is not in the state)
 // Regenerated in session 7 from main aafb6e0, because the simulation had changed since the states were
 // exported (session 3): the adaptivity's targets got their hysteresis (session 6, docs/method.md "Known gap:
 // the adaptive tank at rest"), so the fluidplaying tank at frame 90 holds 1,062 particles, not the stored
@@ -98,6 +104,15 @@ inline LookScene movingPropeller() {
   s.fineRadius = 0.0088f;
   const Eigen::Vector3f tank(0.4f, 0.3f, 0.25f);
   s.state = loadTankState(lookDataDir() + "/propeller_moving.ply", tank, s.fineRadius);
+  s.inner = Eigen::AlignedBox2f(Eigen::Vector2f(-tank.x(), -tank.z()), Eigen::Vector2f(tank.x(), tank.z()));
+  return s;
+}
+
+// The hand tank in motion: the recorded hand pushing the water, fine particles around it and coarse below.
+inline LookScene movingHandTank() {
+  LookScene s;
+  const Eigen::Vector3f tank(0.28f, 0.15f, 0.1849f);
+  s.state = loadTankState(lookDataDir() + "/hand_tank_push_fluidplaying.ply", tank, s.fineRadius);
   s.inner = Eigen::AlignedBox2f(Eigen::Vector2f(-tank.x(), -tank.z()), Eigen::Vector2f(tank.x(), tank.z()));
   return s;
 }
