@@ -33,11 +33,7 @@
 #ifdef FP_TSAN_ANNOTATE
 #include <sanitizer/tsan_interface.h>
 
-#include <cstddef>
 #include <cstdint>
-
-/// libtsan's dynamic annotation: the range is fresh memory, its access history is dropped
-extern "C" void AnnotateNewMemory(const char* file, int line, const volatile void* mem, std::size_t size);
 #endif
 
 namespace fp::sim {
@@ -66,19 +62,26 @@ class ParallelEdges {
     __tsan_release(&m_done);
   }
   /// the caller, after the TBB call returned: every body's writes are visible. Inlined, so that
-  /// forgetDeadStack() starts where the frame of the caller's outOfLine() started.
+  /// acquireDeadStack() scans from where the frame of the caller's outOfLine() started.
   [[gnu::always_inline]] void join() {
     __tsan_acquire(&m_done);
-    forgetDeadStack();
+    acquireDeadStack();
   }
-  /// TBB keeps a loop's wait context and root reduction on the caller's stack, in the frames of outOfLine()
-  /// and below, and workers count them down after their last body, inside libtbb; the caller's next frames
-  /// reuse that stack. It is dead once the call returned: its access history goes (from this function's frame
-  /// down, where outOfLine's was), so the reuse is not taken for a race.
-  [[gnu::noinline]] static void forgetDeadStack() {
-    constexpr std::size_t kSpan = 16384;
+  /// TBB keeps a loop's wait node and wait context (and a reduction's root body) on the caller's stack, in
+  /// the frames of outOfLine() and below. The worker that finishes the loop's last task counts them down
+  /// after its last body (fold_tree: `--m_ref_count`, then `m_wait.release()`, both seq_cst atomics, which
+  /// ThreadSanitizer takes as releases on their addresses), and the caller's wait for them runs inside
+  /// libtbb, uninstrumented: without an edge, the caller's next frames reusing that stack read as races with
+  /// those decrements. The edge TBB's wait forms is stated here: the caller acquires every address of the
+  /// dead frames (16 KiB below this function's frame, where outOfLine's was), which picks up exactly what
+  /// workers released there; an address nothing released costs one lookup. (Resetting the memory instead,
+  /// AnnotateNewMemory, is a no-op in GCC 12's libtsan.) Bodies are untouched: they still never order
+  /// each other.
+  [[gnu::noinline]] static void acquireDeadStack() {
+    constexpr std::uintptr_t kSpan = 16384;
     const auto top = reinterpret_cast<std::uintptr_t>(__builtin_frame_address(0));
-    AnnotateNewMemory(__FILE__, __LINE__, reinterpret_cast<const volatile void*>(top - kSpan), kSpan);
+    for (std::uintptr_t a = top - kSpan; a < top; a += 4)
+      __tsan_acquire(reinterpret_cast<void*>(a));
   }
 
  private:
@@ -93,16 +96,21 @@ class ParallelEdges {
 #endif
 };
 
-/// A reduction's value as TBB carries it between bodies and joins. TBB assigns the last join's value to the
-/// root body after our join returned, possibly on a worker, and the caller copies it out before the TBB
-/// call returns: under ThreadSanitizer an assignment releases the value's address and a copy acquires it.
-/// Otherwise a plain aggregate of the value.
+/// A reduction's value as TBB carries it between bodies and joins. TBB copies the identity into a new body
+/// when it splits a reduction for a thief (before any of our bodies ran there), assigns the last join's
+/// value to the root body after our join returned, possibly on a worker, and the caller copies it out
+/// before the TBB call returns: under ThreadSanitizer every construction and assignment releases the
+/// value's address and every copy acquires it. Otherwise a plain aggregate of the value.
 template <class V>
 struct Carried {
   V value;
 #ifdef FP_TSAN_ANNOTATE
-  explicit Carried(const V& v) : value(v) {}
-  Carried(const Carried& other) : value((__tsan_acquire(const_cast<Carried*>(&other)), other.value)) {}
+  explicit Carried(const V& v) : value(v) {
+    __tsan_release(this);
+  }
+  Carried(const Carried& other) : value((__tsan_acquire(const_cast<Carried*>(&other)), other.value)) {
+    __tsan_release(this);
+  }
   Carried& operator=(const Carried& other) {
     __tsan_acquire(const_cast<Carried*>(&other));
     value = other.value;
@@ -113,7 +121,8 @@ struct Carried {
 };
 
 /// Calls `f` (a TBB call). Under ThreadSanitizer in a frame of its own, so that TBB's objects on the stack
-/// lie below the caller's frame, where ParallelEdges::join() forgets them; otherwise inlined away.
+/// lie below the caller's frame, where ParallelEdges::join() acquires what workers released there; otherwise
+/// inlined away.
 template <class F>
 #ifdef FP_TSAN_ANNOTATE
 [[gnu::noinline]]

@@ -103,6 +103,14 @@ class ClockPlatform : public AppPlatform {
   std::vector<double> times;
 };
 
+/// ThreadSanitizer's build runs the steps about ten times slower (docs/robustness.md, "Races"): the frames
+/// and the slow steps of the deadline test are stretched alike, so a frame still spans a fraction of a step
+#if defined(__SANITIZE_THREAD__)
+constexpr int kDeadlineStretch = 8;
+#else
+constexpr int kDeadlineStretch = 1;
+#endif
+
 /// A headset-like platform: 10 ms frames that never wait for the steps (FrameClock::waitForSteps false); both
 /// tracked hands move along +x 2 mm a frame, their targets set in every frame, drawn or stepping.
 class DeadlinePlatform : public AppPlatform {
@@ -110,7 +118,7 @@ class DeadlinePlatform : public AppPlatform {
   explicit DeadlinePlatform(AppSession& session) : m_session(session) {}
   bool running() override { return true; }
   FrameClock beginFrame() override {
-    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    std::this_thread::sleep_for(std::chrono::milliseconds(10 * kDeadlineStretch));
     FrameClock c;
     c.dt = 0.01;
     c.waitForSteps = false;
@@ -163,7 +171,7 @@ TEST(AppLoopTest, AFrameThatFindsTheStepsRunningDrawsTheLastStateAndQueuesTheHan
   config.hand = false;
   config.stepThread = true;
   config.slowSteps = 3;
-  config.slowStepSeconds = 0.06;
+  config.slowStepSeconds = 0.06 * kDeadlineStretch;
   AppSession session(config);
   attachTrackedHands(session, {}, 1.0);
   DeadlinePlatform platform(session);
