@@ -442,10 +442,15 @@ class StateAccess {
       throw StateError("corrupt: no fluid particle");
     const Vec3 lo = sim.m_scene.domain.min().cast<Real>();
     const Vec3 hi = sim.m_scene.domain.max().cast<Real>();
+    // The largest particle any mass ratio the table allows can make, with a factor of 8 in mass (2 in size)
+    // to spare: a finite but absurd mass or support (1e38) would overflow the grid's cell counts.
+    const double ratioMax = ParamTable::sim().at("mass_ratio").max;
+    const double mMax = 8.0 * ratioMax * double(sim.m_latticeMass);
+    const double hMax = 2.0 * std::cbrt(ratioMax) * double(sim.m_support);
     for (std::size_t i = 0; i < n; ++i) {
       if (!((f.x[i].array() >= lo.array()).all() && (f.x[i].array() <= hi.array()).all()))
         throw StateError("corrupt: particle " + std::to_string(i) + " lies outside the domain");
-      if (!(f.m[i] > 0) || !(f.H[i] > 0) || !std::isfinite(f.m[i]) || !std::isfinite(f.H[i]) ||
+      if (!(f.m[i] > 0) || !(f.H[i] > 0) || !(double(f.m[i]) <= mMax) || !(double(f.H[i]) <= hMax) ||
           f.id[i] >= s.nextId)
         throw StateError("corrupt: particle " + std::to_string(i) + " has a bad mass, support or id");
     }

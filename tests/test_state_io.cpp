@@ -189,6 +189,36 @@ TEST(StateIoErrors, AnEmptyArrayIsReadWithoutCopyingFromNull) {
   }
 }
 
+TEST(StateIoErrors, AnAbsurdButFiniteSupportOrMassIsRefused) {
+  // found by fuzz_state (session 7, after 284,091 runs): a support radius of about 1e38 passed the finiteness
+  // check and overflowed the neighbour grid's reach in cells (float to int, undefined). The reader bounds the
+  // supports and masses by the largest particle the table's largest mass ratio makes.
+  Saved& s = saved();
+  const sim::ParticleSet& p = s.source.particles();
+  ASSERT_GE(p.size(), 4u);
+  for (int field = 0; field < 2; ++field) {
+    const std::vector<sim::Real>& values = field == 0 ? p.H : p.m;
+    const std::string pattern(reinterpret_cast<const char*>(values.data()), 4 * sizeof(sim::Real));
+    const std::size_t at = s.bytes.find(pattern);
+    ASSERT_NE(at, std::string::npos) << "the array is not stored as raw values";
+    for (const sim::Real absurd : {sim::Real(1e30), sim::Real(1e4) * values[0]}) {
+      std::string bad = s.bytes;
+      std::memcpy(bad.data() + at, &absurd, sizeof(absurd));
+      sim::Simulation target(s.scene);
+      try {
+        sim::decodeState(bad, target, false);
+        ADD_FAILURE() << (field == 0 ? "support " : "mass ") << absurd << " accepted";
+      } catch (const sim::StateError& e) {
+        EXPECT_NE(std::string(e.what()).find("particle 0 has a bad mass, support or id"), std::string::npos)
+            << e.what();
+      }
+    }
+  }
+  // the unmodified bytes still load
+  sim::Simulation target(s.scene);
+  EXPECT_NO_THROW(sim::decodeState(s.bytes, target, false));
+}
+
 TEST(StateIoErrors, AnotherSceneIsRefused) {
   Saved& s = saved();
   sim::SceneDesc other = s.scene;
