@@ -44,6 +44,12 @@ void FluidRenderer::Impl::drawGlass(const ViewParams& v, bool backFaces) {
   glDepthMask(GL_FALSE);
   glEnable(GL_CULL_FACE);
   glCullFace(backFaces ? GL_FRONT : GL_BACK);
+  if (!backFaces) {
+    // the near glass wins over water lying on it (the wetted glass puts the surface on the glass plane):
+    // without the offset the two depths tie and the glass's tint speckles pixel by pixel
+    glEnable(GL_POLYGON_OFFSET_FILL);
+    glPolygonOffset(-1.0f, -4.0f);
+  }
   for (const auto& c : colliders) {
     if (!c->desc.container)
       continue;
@@ -51,6 +57,7 @@ void FluidRenderer::Impl::drawGlass(const ViewParams& v, bool backFaces) {
     glass.set("uEdgeWidth", 0.004f * sceneSize);
     drawMesh(glass, c->vao.id, c->vertices, c->model);
   }
+  glDisable(GL_POLYGON_OFFSET_FILL);
   glDisable(GL_CULL_FACE);
   glDepthMask(GL_TRUE);
   glDisable(GL_BLEND);

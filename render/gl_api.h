@@ -59,6 +59,7 @@ void checkError(const char* where);
   X(glIsEnabled)             \
   X(glPixelStorei)           \
   X(glPolygonMode)           \
+  X(glPolygonOffset)         \
   X(glReadBuffer)            \
   X(glReadPixels)            \
   X(glScissor)               \
@@ -96,6 +97,7 @@ FP_GL11_FUNCTIONS(FP_GL11_DECLARE)
 #define glIsEnabled ::fp::render::gl::p_glIsEnabled
 #define glPixelStorei ::fp::render::gl::p_glPixelStorei
 #define glPolygonMode ::fp::render::gl::p_glPolygonMode
+#define glPolygonOffset ::fp::render::gl::p_glPolygonOffset
 #define glReadBuffer ::fp::render::gl::p_glReadBuffer
 #define glReadPixels ::fp::render::gl::p_glReadPixels
 #define glScissor ::fp::render::gl::p_glScissor

@@ -175,8 +175,9 @@ int main(int argc, char** argv) {
                                     std::make_pair("hand_tank_push", test::movingHandTank())}) {
     const test::LookShot shot = test::shoot(renderer, scene, width, height);
     const test::Creases c = test::measureCreases(shot.surface, 2, 20.0f, scene.fineRadius);
-    std::printf("moving %s fluidplaying: creases %.4f of %zu interior water px\n", name, c.fraction,
-                c.interior);
+    const test::ImageSpeckles k = test::measureImageSpeckles(shot.image, shot.depth, 6);
+    std::printf("moving %s fluidplaying: creases %.4f of %zu interior water px, %zu speckled px of %zu\n",
+                name, c.fraction, c.interior, k.speckled, k.water);
     if (!pngDir.empty())
       render::writePng(pngDir + "/moving_" + name + ".png", shot.image);
   }

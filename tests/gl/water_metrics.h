@@ -245,4 +245,35 @@ inline Creases measureCreases(const DepthSurface& s, int step, float degrees, fl
   return c;
 }
 
+// Speckles of the image over the water: water pixels whose brightness (R + G + B) differs by more than
+// `levels` from each of its four neighbours in the same direction while those agree with each other within
+// `levels` (single pixels flickering between two looks, e.g. a tie of depths).
+struct ImageSpeckles {
+  std::size_t water = 0;
+  std::size_t speckled = 0;
+};
+
+inline ImageSpeckles measureImageSpeckles(const render::Image& image, const std::vector<float>& depth,
+                                          int levels) {
+  ImageSpeckles c;
+  auto brightness = [&](int x, int y) {
+    const std::uint8_t* p = image.at(x, y);
+    return int(p[0]) + int(p[1]) + int(p[2]);
+  };
+  for (int y = 1; y < image.height - 1; ++y) {
+    for (int x = 1; x < image.width - 1; ++x) {
+      if (depth[std::size_t(image.height - 1 - y) * image.width + x] <= 0.0f)
+        continue;
+      ++c.water;
+      const int b = brightness(x, y);
+      const int n[4] = {brightness(x - 1, y), brightness(x + 1, y), brightness(x, y - 1),
+                        brightness(x, y + 1)};
+      const int lo = std::min(std::min(n[0], n[1]), std::min(n[2], n[3]));
+      const int hi = std::max(std::max(n[0], n[1]), std::max(n[2], n[3]));
+      c.speckled += hi - lo <= levels && (b > hi + levels || b < lo - levels);
+    }
+  }
+  return c;
+}
+
 }  // namespace fp::test
