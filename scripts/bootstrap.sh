@@ -167,8 +167,8 @@ run_sanitizer_tests() {
 # that proves a race is still reported (TsanCanary.*, tests/tsan_canary.cpp). TBB as Debian ships it: its
 # libtbb is not instrumented, so sim/parallel.h states the spawn and join edges of every parallel call, and
 # tests/tsan.supp suppresses only races inside TBB's own objects, each with its reason. Any report fails the
-# test (halt_on_error). Only the four targets are built (about 6 min on CI's 2 cores); the tests are capped at
-# FP_TSAN_SECONDS (default 1200) in all, a run past the cap fails the stage.
+# test (halt_on_error). Only the four targets are built (559 CPU-s, about 5 min on CI's 2 cores); the tests
+# are capped at FP_TSAN_SECONDS (default 1200) in all, a run past the cap fails the stage.
 readonly TSAN_TARGETS=(test_sim_unit test_app_unit test_physics tsan_canary)
 run_tsan_tests() {
   section "ThreadSanitizer build (build-tsan/)"
