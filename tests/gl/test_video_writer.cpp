@@ -6,9 +6,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <string>
-
 #include <optional>
+#include <string>
 
 #include "engine/frame_capture.h"
 #include "engine/panel.h"
@@ -48,6 +47,16 @@ std::string run(const std::string& command) {
     pclose(pipe);
   }
   return out;
+}
+
+/// ffprobe's "width,height,rate,frames" of the first video stream of `file`; nullopt without ffprobe
+std::optional<std::string> probeVideo(const fs::path& file) {
+  if (run("command -v ffprobe").empty())
+    return std::nullopt;
+  return run(
+      "ffprobe -v error -count_frames -select_streams v:0 -show_entries "
+      "stream=nb_read_frames,width,height,r_frame_rate -of csv=p=0 '" +
+      file.string() + "'");
 }
 
 /// Runs the test in `dir` (the window writes video_NNN.mp4 into the working directory) and goes back.
@@ -98,13 +107,10 @@ TEST(VideoWriterTest, WritesAReadableVideoOfTheFrames) {
   }
   ASSERT_TRUE(fs::exists(file));
   EXPECT_GT(fs::file_size(file), 0u);
-  if (run("command -v ffprobe").empty())
+  const std::optional<std::string> probe = probeVideo(file);
+  if (!probe)
     GTEST_SKIP() << "ffprobe is not on PATH: frame count and size not checked";
-  const std::string probe =
-      run("ffprobe -v error -count_frames -select_streams v:0 -show_entries "
-          "stream=nb_read_frames,width,height,r_frame_rate -of csv=p=0 '" +
-          file.string() + "'");
-  EXPECT_NE(probe.find("64,48,60/1,6"), std::string::npos) << probe;
+  EXPECT_NE(probe->find("64,48,60/1,6"), std::string::npos) << *probe;
 }
 
 TEST(VideoWriterTest, AFrameOfAnotherSizeIsAnError) {
@@ -144,13 +150,10 @@ TEST(WindowVideoTest, TheRecordToggleWritesAVideoAtTheSceneFrameRate) {
   }
   const fs::path file = dir / "video_000.mp4";
   ASSERT_TRUE(fs::exists(file));
-  if (run("command -v ffprobe").empty())
+  const std::optional<std::string> probe = probeVideo(file);
+  if (!probe)
     GTEST_SKIP() << "ffprobe is not on PATH: frame count and size not checked";
-  const std::string probe =
-      run("ffprobe -v error -count_frames -select_streams v:0 -show_entries "
-          "stream=nb_read_frames,width,height,r_frame_rate -of csv=p=0 '" +
-          file.string() + "'");
-  EXPECT_NE(probe.find("64,48,30/1,5"), std::string::npos) << probe;
+  EXPECT_NE(probe->find("64,48,30/1,5"), std::string::npos) << *probe;
 }
 
 TEST(WindowVideoTest, TheRecordToggleWithoutFfmpegStopsWithAOneLineMessage) {

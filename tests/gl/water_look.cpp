@@ -50,18 +50,9 @@ render::Image angleMap(const test::DepthSurface& s, float surfaceY, const Eigen:
 // Percentiles of the normal angle over the measured free surface [deg]: where the rms comes from.
 std::string anglePercentiles(const test::DepthSurface& s, float surfaceY, const Eigen::AlignedBox2f& inner) {
   std::vector<float> a;
-  const Eigen::Vector3f eye = s.eye();
-  for (int y = 0; y < s.height(); ++y) {
-    for (int x = 0; x < s.width(); ++x) {
-      const Eigen::Vector3f d = s.rayDirection(x, y);
-      if (d.y() >= -1e-4f)
-        continue;
-      const Eigen::Vector3f hit = eye + d * ((surfaceY - eye.y()) / d.y());
-      const Eigen::Vector3f n = s.normal(x, y);
-      if (inner.contains(Eigen::Vector2f(hit.x(), hit.z())) && n.squaredNorm() > 0.0f)
-        a.push_back(std::acos(std::clamp(std::abs(n.y()), 0.0f, 1.0f)) * 180.0f / float(M_PI));
-    }
-  }
+  test::forEachRestingSurfacePixel(s, surfaceY, inner, [&](int, int, const Eigen::Vector3f& n) {
+    a.push_back(float(test::angleFromVerticalDegrees(n)));
+  });
   if (a.empty())
     return "";
   std::sort(a.begin(), a.end());

@@ -133,11 +133,12 @@ struct RestingSurface {
   double rmsHeightError = 0;    // rms of the same [m]
 };
 
-inline RestingSurface measureRestingSurface(const DepthSurface& s, float surfaceY,
-                                            const Eigen::AlignedBox2f& inner) {
-  RestingSurface r;
-  double angle2 = 0, dh = 0, dh2 = 0;
-  std::size_t water = 0;
+// Calls f(x, y, n) for each pixel whose view ray meets the plane y = surfaceY inside `inner` (x-z) and that
+// shows water (n: its reconstructed normal); returns how many pixels meet the plane there, water or not.
+template <class F>
+std::size_t forEachRestingSurfacePixel(const DepthSurface& s, float surfaceY,
+                                       const Eigen::AlignedBox2f& inner, F&& f) {
+  std::size_t pixels = 0;
   const Eigen::Vector3f eye = s.eye();
   for (int y = 0; y < s.height(); ++y) {
     for (int x = 0; x < s.width(); ++x) {
@@ -147,18 +148,33 @@ inline RestingSurface measureRestingSurface(const DepthSurface& s, float surface
       const Eigen::Vector3f hit = eye + d * ((surfaceY - eye.y()) / d.y());
       if (!inner.contains(Eigen::Vector2f(hit.x(), hit.z())))
         continue;
-      ++r.pixels;
+      ++pixels;
       const Eigen::Vector3f n = s.normal(x, y);
-      if (n.squaredNorm() == 0.0f)
-        continue;
-      ++water;
-      const double a = std::acos(std::clamp(double(std::abs(n.y())), 0.0, 1.0)) * 180.0 / M_PI;
-      angle2 += a * a;
-      const double e = double(s.worldPosition(x, y).y() - surfaceY);
-      dh += e;
-      dh2 += e * e;
+      if (n.squaredNorm() > 0.0f)
+        f(x, y, n);
     }
   }
+  return pixels;
+}
+
+// the angle between a normal and the vertical [deg]
+inline double angleFromVerticalDegrees(const Eigen::Vector3f& n) {
+  return std::acos(std::clamp(double(std::abs(n.y())), 0.0, 1.0)) * 180.0 / M_PI;
+}
+
+inline RestingSurface measureRestingSurface(const DepthSurface& s, float surfaceY,
+                                            const Eigen::AlignedBox2f& inner) {
+  RestingSurface r;
+  double angle2 = 0, dh = 0, dh2 = 0;
+  std::size_t water = 0;
+  r.pixels = forEachRestingSurfacePixel(s, surfaceY, inner, [&](int x, int y, const Eigen::Vector3f& n) {
+    ++water;
+    const double a = angleFromVerticalDegrees(n);
+    angle2 += a * a;
+    const double e = double(s.worldPosition(x, y).y() - surfaceY);
+    dh += e;
+    dh2 += e * e;
+  });
   if (water) {
     r.coverage = double(water) / double(r.pixels);
     r.rmsNormalDegrees = std::sqrt(angle2 / double(water));
