@@ -91,6 +91,13 @@ struct NeighborList {
   }
 };
 
+/// Bounding box of points, for the search's test of a whole source against a query point.
+using PointBounds = Eigen::AlignedBox<Real, 3>;
+
+/// The bounding box of x[0..n) (empty when n is 0), in parallel. A source whose points never move (the static
+/// walls) computes it once and passes it in GridPoints::bounds.
+PointBounds pointBounds(const Vec3* x, std::size_t n);
+
 /// A set of points sorted into a grid, to be searched: positions, support radii and cell ranges.
 struct GridPoints {
   const Vec3* x = nullptr;  ///< sorted positions
@@ -98,7 +105,14 @@ struct GridPoints {
   Real uniformH = 0;        ///< support when H is nullptr
   const std::vector<std::uint32_t>* cellStart = nullptr;  ///< cell ranges (from UniformGrid::sort)
   std::uint32_t indexOffset = 0;                          ///< added to every index written to the lists
+  const PointBounds* bounds = nullptr;  ///< pointBounds of the points (nullptr: computed by every build)
 };
+
+/// Whether the neighbour search tests its candidates 8 at a time with AVX2 (chosen at run time from the CPU;
+/// the lists are the same either way). Tests switch it off to compare with the scalar path; switching it on
+/// on a CPU without AVX2 keeps it off. Returns the setting in force.
+bool neighborSimdAvailable();
+bool setNeighborSimd(bool on);
 
 /// Builds neighbour lists: all pairs with |x_i - x_j| < (H_i + H_j) / 2.
 class NeighborSearch {
@@ -122,12 +136,7 @@ class NeighborSearch {
 
   /// bytes held by scratch buffers (the lists are written in place)
   std::size_t memoryBytes() const {
-    std::size_t bytes = 0;
-    for (const std::vector<Real>& c : m_cellMaxH)
-      bytes += c.capacity() * sizeof(Real);
-    for (const std::vector<Real>& c : m_windowMaxH)
-      bytes += c.capacity() * sizeof(Real);
-    return bytes + (m_ownOffsets.capacity() + m_received.capacity()) * sizeof(std::uint32_t) +
+    return (m_ownOffsets.capacity() + m_received.capacity()) * sizeof(std::uint32_t) +
            m_chunkPairs.capacity() * sizeof(std::size_t);
   }
 
@@ -138,10 +147,6 @@ class NeighborSearch {
                   const std::vector<GridPoints>& sources, int selfSource, Real maxH, NeighborList& out,
                   bool ownSupport);
 
-  // per source with per-point supports, indexed like its cell starts: the largest support of each cell
-  std::vector<std::vector<Real>> m_cellMaxH;
-  // the same, largest over a window of cells along x
-  std::vector<std::vector<Real>> m_windowMaxH;
   // buildSymmetric: where each point's own list (its neighbours no larger than itself) was written
   std::vector<std::uint32_t> m_ownOffsets;
   // buildSymmetric: the size of the last lists (the next build's room)

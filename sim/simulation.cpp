@@ -146,6 +146,7 @@ Simulation::Simulation(const SceneDesc& scene) : m_scene(scene), m_params(scene.
   // static boundary particles are sorted into the grid once
   m_grid.sort(m_boundary.x.data(), m_boundary.staticCount(), m_order, m_staticCells);
   m_boundary.permute(0, m_order);
+  m_staticBounds = pointBounds(m_boundary.x.data(), m_boundary.staticCount());
 
   // The adaptive modes start from the coarsened lattice (createFluid); the band between fine and coarse is
   // filled in by the first adaptation steps, gradually, as during the run. (Settling it before time starts,
@@ -420,7 +421,8 @@ void Simulation::searchNeighbors() {
     m_search.build(m_grid, m_fluid.x, m_fluid.H, {fluidSrc}, 0, maxH, m_fluidNbrs);
   std::vector<GridPoints> walls;
   if (nStatic > 0)
-    walls.push_back(GridPoints{m_boundary.x.data(), nullptr, m_boundary.support(), &m_staticCells, 0});
+    walls.push_back(
+        GridPoints{m_boundary.x.data(), nullptr, m_boundary.support(), &m_staticCells, 0, &m_staticBounds});
   if (nKinematic > 0) {
     walls.push_back(GridPoints{m_boundary.x.data() + nStatic, nullptr, m_boundary.support(),
                                &m_kinematicCells, std::uint32_t(nStatic)});

@@ -167,6 +167,7 @@ class Simulation {
   std::vector<std::uint32_t> m_order;
   std::vector<std::uint32_t> m_fluidCells;
   std::vector<std::uint32_t> m_staticCells;
+  PointBounds m_staticBounds;  // bounding box of the static boundary particles (they never move)
   std::vector<std::uint32_t> m_kinematicCells;
   DfsphSolver m_solver;
   AdaptivityMode m_mode = AdaptivityMode::UniformHigh;

@@ -252,3 +252,65 @@ TEST(NeighborSearchTest, SymmetricBuildGivesTheSameListsInTheSameOrder) {
   }
   EXPECT_GT(expected.indices.size(), 4000u * 10);
 }
+
+TEST(NeighborSearchTest, Avx2CandidateTestGivesTheScalarLists) {
+  // The AVX2 path tests 8 candidates at a time (runtime dispatch): every build must give the scalar path's
+  // lists, bit for bit, including the pairs at |x_ij| = H_ij up to round-off of a lattice on the cell borders
+  // and the last points of each source (read 8 at a time only where 8 exist).
+  if (!neighborSimdAvailable())
+    GTEST_SKIP() << "no AVX2 on this CPU: the scalar path is the only one";
+  struct Restore {
+    ~Restore() { setNeighborSimd(true); }
+  } restore;
+  const Aabb box(Vec3d(-0.2, 0.0, -0.1), Vec3d(0.3, 0.4, 0.2));
+  const Real h = 0.03f;
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  Cloud c = randomCloud(3000, h, 0.0, 29, box);
+  for (Real& H : c.H)
+    H = u(rng) < 0.5 ? h : Real(h * (1.0 + 2.0 * u(rng)));
+  const Vec3d origin = box.min() - Vec3d::Constant(double(h));
+  for (int k = 0; k < 10 * 10 * 10; ++k) {
+    const Vec3d step(k % 10 + 4, k / 10 % 10 + 4, k / 100 + 4);
+    c.x.push_back((origin + 0.5 * double(h) * step).cast<Real>());
+    c.H.push_back(h);
+  }
+  Cloud wall = randomCloud(1500, h, 0.0, 31, box);
+  UniformGrid grid;
+  grid.setup(box, h);
+  std::vector<std::uint32_t> order, cells, wallCells;
+  auto sortCloud = [&](Cloud& cloud, std::vector<std::uint32_t>& cellStarts) {
+    grid.sort(cloud.x.data(), cloud.x.size(), order, cellStarts);
+    Cloud s = cloud;
+    for (std::size_t k = 0; k < order.size(); ++k) {
+      s.x[k] = cloud.x[order[k]];
+      s.H[k] = cloud.H[order[k]];
+    }
+    cloud = s;
+  };
+  sortCloud(c, cells);
+  sortCloud(wall, wallCells);
+  const Real maxH = *std::max_element(c.H.begin(), c.H.end());
+  const PointBounds wallBounds = pointBounds(wall.x.data(), wall.x.size());
+  auto buildAll = [&](bool simd) {
+    EXPECT_EQ(setNeighborSimd(simd), simd);
+    NeighborSearch search;
+    std::vector<NeighborList> lists(3);
+    search.build(grid, c.x, c.H, {GridPoints{c.x.data(), c.H.data(), 0, &cells, 0}}, 0, maxH, lists[0]);
+    search.buildSymmetric(grid, c.x, c.H, cells, maxH, lists[1]);
+    // a uniform source twice (the second one's indices offset), once with its bounds given
+    search.build(grid, c.x, c.H,
+                 {GridPoints{wall.x.data(), nullptr, h, &wallCells, 0, &wallBounds},
+                  GridPoints{wall.x.data(), nullptr, h, &wallCells, std::uint32_t(wall.x.size())}},
+                 -1, maxH, lists[2]);
+    return lists;
+  };
+  const std::vector<NeighborList> scalar = buildAll(false);
+  const std::vector<NeighborList> simd = buildAll(true);
+  for (std::size_t k = 0; k < scalar.size(); ++k) {
+    EXPECT_EQ(simd[k].offsets, scalar[k].offsets) << "build " << k;
+    EXPECT_EQ(simd[k].indices, scalar[k].indices) << "build " << k;
+  }
+  EXPECT_GT(scalar[0].indices.size(), 4000u * 10);
+  EXPECT_GT(scalar[2].indices.size(), 4000u * 2);
+}
