@@ -132,8 +132,8 @@ void Adaptivity::planSplit(const AdaptContext& ctx, SplitPlan& plan) const {
   // A signed distance is 1-Lipschitz outside the solid (where it is exact): a collider whose distance from
   // the parent exceeds the farthest child offset by the clearance cannot hold a child of any orientation.
   // One query per collider drops those; for the others the distance is restricted to the ball the children
-  // can reach (BallSdf: for a mesh, only the triangles that can be closest to a point of it, a few dozen of
-  // the propeller's 1,696), so the K x n child queries no longer pass over every triangle.
+  // can reach (BallSdf: for a mesh, only the triangles that can be closest to a point of it), so the K x n
+  // child queries no longer pass over all of the propeller's 1,696 triangles.
   double reach = 0.0;
   for (const Vec3d& offset : SplitTemplates::get().offsets(plan.n))
     reach = std::max(reach, offset.norm());
@@ -141,6 +141,7 @@ void Adaptivity::planSplit(const AdaptContext& ctx, SplitPlan& plan) const {
   const Vec3d xo = p.x[o].cast<double>();
   struct NearCollider {
     const ColliderState* state;
+    Vec3d centre;  // the parent, in the collider's frame
     BallSdf sdf;
   };
   std::vector<NearCollider> walls;
@@ -151,14 +152,19 @@ void Adaptivity::planSplit(const AdaptContext& ctx, SplitPlan& plan) const {
     // their offsets say: the margins)
     BallSdf sdf(col.desc, local, reach * (1.0 + 1e-4) + 1e-6);
     if (sdf.atCentre() - reach < 2.002 * childRadius)
-      walls.push_back({&col, std::move(sdf)});
+      walls.push_back({&col, local, std::move(sdf)});
   }
   auto valid = [&](const std::vector<Vec3>& children) {
     for (const NearCollider& wall : walls) {
       const Quatd toLocal = wall.state->orientation.conjugate();
       for (const Vec3& xs : children) {
         // a child must keep one of its own spacings from the wall surface
-        if (wall.sdf(toLocal * (xs.cast<double>() - wall.state->position)) < 2.0 * childRadius)
+        const Vec3d q = toLocal * (xs.cast<double>() - wall.state->position);
+        // (1-Lipschitz again: a child nearer the parent than the parent's distance less the clearance keeps
+        // the clearance; the margin leaves the cases within round-off of it to the query)
+        if (wall.sdf.atCentre() - (q - wall.centre).norm() >= 2.0 * childRadius + 1e-9)
+          continue;
+        if (wall.sdf(q) < 2.0 * childRadius)
           return false;
       }
     }
