@@ -13,8 +13,12 @@ namespace {
 
 constexpr std::size_t kGrain = 1024;  // fixed grain: reductions split the same way whatever the thread count
 constexpr Real kEps = Real(1e-6);
-// divergence solve only where the neighbourhood is full (SPlisHSPlasH uses the same threshold in 3D)
-constexpr std::uint32_t kMinNeighborsForDivergence = 20;
+// Divergence solve only where the neighbourhood is full: the particle's own volume sum sum_j V_j W_ij (its
+// density over the rest density, boundary included) at least this. SPlisHSPlasH counts neighbours (20 in 3D),
+// which skips a fine interior particle next to coarse ones (about 10 neighbours, each of many times its
+// volume); 0.72 is the ratio that best reproduces the 20-neighbour rule on a uniform tank at rest
+// (docs/method.md, Divergence solve).
+constexpr Real kMinDensityRatioForDivergence = Real(0.72);
 
 using Range = tbb::blocked_range<std::size_t>;
 
@@ -197,15 +201,15 @@ SolveResult DfsphSolver::divergenceSolve(SolverContext& ctx, Real dt) {
   if (n == 0)
     return {};
   m_k.resize(n);
-  const std::uint32_t* fo = ctx.fluidNbrs.offsets.data();
-  const std::uint32_t* bo = ctx.boundaryNbrs.offsets.data();
+  const Real* rho = p.rho.data();
   const Real* factor = m_factor.data();
   Real* kv = p.kappaV.data();
   // only expansion-free motion is enforced: compression (positive rate) is corrected, and only in full
-  // neighbourhoods, as in Bender & Koschier's reference implementation
+  // neighbourhoods (by volume, see kMinDensityRatioForDivergence), as in Bender & Koschier's reference
+  // implementation
+  const Real minRho = kMinDensityRatioForDivergence * Real(ctx.params.restDensity);
   auto clampRate = [&](std::size_t i, Real rate) {
-    const std::uint32_t count = (fo[i + 1] - fo[i]) + (bo[i + 1] - bo[i]);
-    return count < kMinNeighborsForDivergence ? Real(0) : std::max(rate, Real(0));
+    return rho[i] < minRho ? Real(0) : std::max(rate, Real(0));
   };
   const double tolerance = ctx.params.divergenceTolerance * 0.01;
   const Real invDt = Real(1) / dt;

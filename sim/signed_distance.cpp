@@ -182,9 +182,14 @@ std::shared_ptr<const MeshSdfData> buildMeshSdfData(const TriangleMesh& mesh) {
 /// angle-weighted pseudo-normal of the closest feature (Baerentzen & Aanaes 2005). The pseudo-normal is
 /// assembled from every triangle of the component whose closest point is the same point, each weighted by its
 /// angle there (the corner angle at a vertex, pi on an edge, 2 pi inside), so no adjacency table is needed.
-double componentSdf(const TriangleMesh& mesh, const MeshSdfData& data, std::size_t component,
-                    const Vec3d& p) {
-  const std::vector<std::uint32_t>& tris = data.components[component];
+namespace {
+
+/// componentSdf over `tris`, a subset of one component's triangles (in the component's order) that holds
+/// every triangle whose closest point to p is within the tolerance of the component's closest point
+double sdfOverTriangles(const TriangleMesh& mesh, const MeshSdfData& data,
+                        const std::vector<std::uint32_t>& tris, const Vec3d& p) {
+  if (tris.empty())
+    return std::numeric_limits<double>::infinity();
   thread_local std::vector<ClosestPoint> closest;
   closest.resize(tris.size());
   double best = std::numeric_limits<double>::infinity();
@@ -230,6 +235,13 @@ double componentSdf(const TriangleMesh& mesh, const MeshSdfData& data, std::size
     pseudoNormal += weight * data.normals[tri];
   }
   return (p - c).dot(pseudoNormal) < 0.0 ? -distance : distance;
+}
+
+}  // namespace
+
+double componentSdf(const TriangleMesh& mesh, const MeshSdfData& data, std::size_t component,
+                    const Vec3d& p) {
+  return sdfOverTriangles(mesh, data, data.components[component], p);
 }
 
 namespace {
@@ -295,6 +307,49 @@ double signedDistanceLocal(const ColliderDesc& collider, const Vec3d& localPoint
     }
   }
   throw InputError("collider '" + collider.name + "': unknown shape");
+}
+
+BallSdf::BallSdf(const ColliderDesc& collider, const Vec3d& localCentre, double radius)
+    : m_collider(&collider) {
+  if (collider.shape != ShapeType::Mesh || !collider.mesh || collider.mesh->triangles.empty()) {
+    m_centre = signedDistanceLocal(collider, localCentre);
+    return;
+  }
+  m_data = cachedMeshSdfData(collider.mesh);
+  const TriangleMesh& mesh = *collider.mesh;
+  // The unsigned distance to a component is 1-Lipschitz: at a point q of the ball it is at most d_k + radius
+  // (d_k its distance from the centre), and a triangle farther than d_k + 2 radius from the centre is
+  // farther than that from q, so it is never q's closest (the tolerance keeps the pseudo-normal's ties).
+  m_subsets.resize(m_data->components.size());
+  m_centre = std::numeric_limits<double>::infinity();
+  for (std::size_t k = 0; k < m_data->components.size(); ++k) {
+    const std::vector<std::uint32_t>& tris = m_data->components[k];
+    thread_local std::vector<double> distance2;
+    distance2.resize(tris.size());
+    double best = std::numeric_limits<double>::infinity();
+    for (std::size_t t = 0; t < tris.size(); ++t) {
+      const auto& tri = mesh.triangles[tris[t]];
+      const ClosestPoint c =
+          closestOnTriangle(localCentre, mesh.vertices[tri[0]], mesh.vertices[tri[1]], mesh.vertices[tri[2]]);
+      distance2[t] = (c.point - localCentre).squaredNorm();
+      best = std::min(best, distance2[t]);
+    }
+    const double reach = std::sqrt(best) + 2.0 * radius + 4.0 * m_data->tolerance;
+    for (std::size_t t = 0; t < tris.size(); ++t) {
+      if (distance2[t] <= reach * reach)
+        m_subsets[k].push_back(tris[t]);
+    }
+    m_centre = std::min(m_centre, sdfOverTriangles(mesh, *m_data, m_subsets[k], localCentre));
+  }
+}
+
+double BallSdf::operator()(const Vec3d& localPoint) const {
+  if (!m_data)
+    return signedDistanceLocal(*m_collider, localPoint);
+  double result = std::numeric_limits<double>::infinity();
+  for (const std::vector<std::uint32_t>& subset : m_subsets)
+    result = std::min(result, sdfOverTriangles(*m_collider->mesh, *m_data, subset, localPoint));
+  return result;
 }
 
 double signedDistance(const ColliderDesc& collider, const Vec3d& worldPoint) {

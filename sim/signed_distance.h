@@ -37,4 +37,22 @@ std::shared_ptr<const MeshSdfData> buildMeshSdfData(const TriangleMesh& mesh);
 /// Signed distance from p (mesh frame) to closed component `component` of the mesh [m]
 double componentSdf(const TriangleMesh& mesh, const MeshSdfData& data, std::size_t component, const Vec3d& p);
 
+/// The signed distance to one collider for points within `radius` of a centre (collider frame): the same
+/// values as signedDistanceLocal there, for a mesh at the cost of the triangles that can be closest to a
+/// point of the ball (one pass over all of them at construction). Keeps a reference to the collider.
+class BallSdf {
+ public:
+  BallSdf(const ColliderDesc& collider, const Vec3d& localCentre, double radius);
+  /// the signed distance at the centre [m]
+  double atCentre() const { return m_centre; }
+  /// the signed distance at a point within `radius` of the centre [m]
+  double operator()(const Vec3d& localPoint) const;
+
+ private:
+  const ColliderDesc* m_collider;
+  std::shared_ptr<const MeshSdfData> m_data;          // meshes only
+  std::vector<std::vector<std::uint32_t>> m_subsets;  // per component: the triangles that can be closest
+  double m_centre = 0.0;
+};
+
 }  // namespace fp::sim

@@ -81,6 +81,7 @@ struct Row {
   double levelsShare = 0;  // levels alone, share of step time
   double level1Share = 0;  // time_levels = 2: particle-steps on time level 1, share of all particle-steps
   double heldShare = 0;    // particle-steps that held their acceleration (skipped the solves), share
+  sim::PhaseTimes times;   // wall time by phase, summed over the steps (of the first run)
   double surfaceFine = 0, band = 0, dynamic = 0, base = 0, tooLight = 0;  // mean particles per frame
   double densityErrorParticles = 0, densityErrorVolume = 0;  // frame means, per particle and volume-weighted
   std::vector<double> runHeightMean, runHeightMax;           // heightMean and heightMax of every run [m]
@@ -280,6 +281,7 @@ Row runMode(sim::SceneDesc scene, sim::AdaptivityMode mode, double simTime, doub
   const double total = run.times.total();
   row.adaptivityShare = total > 0 ? (run.times.levels + run.times.adaptation) / total : 0.0;
   row.levelsShare = total > 0 ? run.times.levels / total : 0.0;
+  row.times = run.times;
   if (run.particleSteps > 0) {
     row.level1Share = double(run.level1ParticleSteps) / double(run.particleSteps);
     row.heldShare = double(run.heldParticleSteps) / double(run.particleSteps);
@@ -520,6 +522,16 @@ int main(int argc, char** argv) {
                 r.mode.c_str(), u * r.surfaceFine, u * r.band, u * r.dynamic, u * r.base, u * r.tooLight,
                 100 * r.levelsShare, 100 * r.densityErrorParticles, 100 * r.densityErrorVolume,
                 100 * r.level1Share, 100 * r.heldShare);
+  }
+  std::printf("\nwall time by phase, ms per step (first run of each mode):\n");
+  std::printf("%-13s %9s %9s %9s %9s %9s %9s %9s %9s %9s %9s\n", "mode", "neighb.", "density", "diverg.",
+              "viscos.", "pressure", "bound.", "integr.", "levels", "adapt.", "total");
+  for (const Row& r : rows) {
+    const double k = r.steps > 0 ? 1000.0 / double(r.steps) : 0.0;
+    const sim::PhaseTimes& t = r.times;
+    std::printf("%-13s %9.3f %9.3f %9.3f %9.3f %9.3f %9.3f %9.3f %9.3f %9.3f %9.3f\n", r.mode.c_str(),
+                k * t.neighbors, k * t.density, k * t.divergence, k * t.viscosity, k * t.pressure,
+                k * t.boundaries, k * t.integrate, k * t.levels, k * t.adaptation, k * t.total());
   }
   if (runs > 1) {
     // an order between two modes is claimed only where the means differ by more than the spreads

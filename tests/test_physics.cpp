@@ -48,8 +48,41 @@ TEST(PhysicsTest, TankAtRestSettlesHydrostatically) {
     comBefore += x.cast<double>() / double(n);
   const Vec3d impulseBefore = sim.boundaryImpulse();
   const double t0 = sim.time();
-  while (sim.time() < 2.0)
+  // bottom pressure p = k rho^2 / rho0 (both solves) near the floor, away from the side walls, against rho g
+  // h; the free surface lies a particle radius above the top layer. The layer touching the floor is left out:
+  // with Akinci's mirrored pressure the wall pushes with the particle's own stiffness only, so that layer
+  // carries ~1.4x. One step's ratio scatters by 6 % (standard deviation over the steps from 1 s to 2 s, mean
+  // 0.98): it is averaged over the steps of the last 0.5 s.
+  const double floorLayerTop = 3.5 * scene.params.particleRadius;
+  auto bottomPressureRatio = [&](int& count) {
+    const ParticleSet& q = sim.particles();
+    double top = 0.0;
+    for (const Vec3& x : q.x)
+      top = std::max(top, double(x.y()));
+    const double surface = top + scene.params.particleRadius;
+    double pSum = 0.0, expectSum = 0.0;
+    count = 0;
+    for (std::size_t i = 0; i < q.size(); ++i) {
+      const Vec3& x = q.x[i];
+      if (x.y() > floorLayerTop && x.y() < 0.045 && std::abs(x.x()) < 0.06 && std::abs(x.z()) < 0.06) {
+        pSum += sim.pressure(i);
+        expectSum += rho0 * g * (surface - x.y());
+        ++count;
+      }
+    }
+    return count > 0 ? pSum / expectSum : 0.0;
+  };
+  double ratioSum = 0.0;
+  int ratioSteps = 0;
+  int count = 0;
+  while (sim.time() < 2.0) {
     sim.step();
+    const double ratio = bottomPressureRatio(count);
+    ASSERT_GT(count, 10);
+    ratioSum += ratio;
+    ++ratioSteps;
+  }
+  const double pressureRatio = ratioSum / ratioSteps;
   const ParticleSet& p = sim.particles();
 
   // density error bound
@@ -62,8 +95,11 @@ TEST(PhysicsTest, TankAtRestSettlesHydrostatically) {
     meanSpeed += double(p.v[i].norm()) / double(n);
     comAfter += p.x[i].cast<double>() / double(n);
   }
-  std::printf("tank at rest after 2 s: mean speed %.4f m/s, max %.4f m/s, centre of mass moved %.3g m\n",
-              meanSpeed, maxSpeed, (comAfter - comBefore).norm());
+  std::printf(
+      "tank at rest after 2 s: mean speed %.4f m/s, max %.4f m/s, centre of mass moved %.3g m; bottom "
+      "pressure "
+      "%.4f of hydrostatic (mean over the last 0.5 s)\n",
+      meanSpeed, maxSpeed, (comAfter - comBefore).norm(), pressureRatio);
   // residual jitter of a still tank with weak XSPH damping: measured 2.75 cm/s mean and 16.1 cm/s at most
   // after 2 s; bounds 1.25x those
   EXPECT_LT(meanSpeed, 0.035);
@@ -73,29 +109,8 @@ TEST(PhysicsTest, TankAtRestSettlesHydrostatically) {
   const Vec3d force = (sim.boundaryImpulse() - impulseBefore) / (sim.time() - t0);
   EXPECT_NEAR(force.y(), sim.totalMass() * g, 0.01 * sim.totalMass() * g);
 
-  // bottom pressure p = k rho^2 / rho0 (both solves) near the floor, away from the side walls, against rho g
-  // h; the free surface lies a particle radius above the top layer. The layer touching the floor is left out:
-  // with Akinci's mirrored pressure the wall pushes with the particle's own stiffness only, so that layer
-  // carries ~1.4x.
-  const double floorLayerTop = 3.5 * scene.params.particleRadius;
-  double top = 0.0;
-  for (const Vec3& x : p.x)
-    top = std::max(top, double(x.y()));
-  const double surface = top + scene.params.particleRadius;
-  double pSum = 0.0, expectSum = 0.0;
-  int count = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    const Vec3& x = p.x[i];
-    if (x.y() > floorLayerTop && x.y() < 0.045 && std::abs(x.x()) < 0.06 && std::abs(x.z()) < 0.06) {
-      pSum += sim.pressure(i);
-      expectSum += rho0 * g * (surface - x.y());
-      ++count;
-    }
-  }
-  ASSERT_GT(count, 10);
-  EXPECT_NEAR(pSum / expectSum, 1.0, 0.05)
-      << "mean speed " << meanSpeed << " max " << maxSpeed << " bottom pressure " << pSum / count << " Pa vs "
-      << expectSum / count;
+  EXPECT_NEAR(pressureRatio, 1.0, 0.05) << "mean speed " << meanSpeed << " max " << maxSpeed
+                                        << " bottom pressure over hydrostatic, mean over the last 0.5 s";
 }
 
 TEST(PhysicsTest, DamBreakSmallStaysInsideAndConserves) {
