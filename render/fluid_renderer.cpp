@@ -245,7 +245,8 @@ void FluidRenderer::update(const FrameData& frame) {
       o[1] = p.x[i].y();
       o[2] = p.x[i].z();
       o[3] = 0.25f * p.H[i];
-      o[4] = p.splitTime[i] >= 0.0f ? float(frame.time - double(p.splitTime[i])) : -1.0f;
+      const float splitTime = p.splitTimeOf(i);
+      o[4] = splitTime >= 0.0f ? float(frame.time - double(splitTime)) : -1.0f;
       o[5] = colors ? normalizeColorValue(colorFieldValue(s.colorField, p, i, frame.scales), r.legendRange)
                     : 0.0f;
       r.maxRadius = std::max(r.maxRadius, o[3]);

@@ -84,11 +84,11 @@ float colorFieldValue(ColorField field, const sim::ParticleSet& p, std::size_t i
     case ColorField::MassLevel:
       return float(double(p.m[i]) / scales.fineMass);
     case ColorField::Phi:
-      return p.levelPhi[i];
+      return p.levelPhiOf(i);
     case ColorField::Omega:
-      return p.levelOmega[i];
+      return p.levelOmegaOf(i);
     case ColorField::Nu:
-      return p.levelNu[i];
+      return p.levelNuOf(i);
     case ColorField::Speed:
       return p.v[i].norm();
     case ColorField::DensityError:

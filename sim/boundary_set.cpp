@@ -1,5 +1,6 @@
 #include "sim/boundary_set.h"
 
+#include <stdexcept>
 #include <unordered_map>
 
 #include "sim/boundary_sampling.h"
@@ -61,11 +62,14 @@ void BoundarySet::build(const std::vector<ColliderState>& colliders, Real partic
       if (cs.desc.kinematic() != (pass == 1))
         continue;
       const std::size_t begin = x.size();
-      for (const Vec3d& p : sampleColliderLocal(cs.desc, spacing)) {
-        local.push_back(p);
+      const std::vector<Vec3d> points = sampleColliderLocal(cs.desc, spacing);
+      for (const Vec3d& p : points) {
         x.push_back((cs.orientation * p + cs.position).cast<Real>());
-        v.push_back(Vec3::Zero());
         collider.push_back(std::uint16_t(c));
+      }
+      if (pass == 1) {
+        local.insert(local.end(), points.begin(), points.end());
+        v.resize(local.size(), Vec3::Zero());
       }
       psi.resize(x.size());
       computeVolumes(x, begin, x.size(), m_support, psi);
@@ -73,6 +77,12 @@ void BoundarySet::build(const std::vector<ColliderState>& colliders, Real partic
     if (pass == 0)
       m_staticCount = x.size();
   }
+  // built once: no spare capacity from the growth of the vectors
+  x.shrink_to_fit();
+  v.shrink_to_fit();
+  psi.shrink_to_fit();
+  local.shrink_to_fit();
+  collider.shrink_to_fit();
   updateKinematic(colliders);
 }
 
@@ -81,32 +91,55 @@ void BoundarySet::updateKinematic(const std::vector<ColliderState>& colliders) {
   parallelFor(tbb::blocked_range<std::size_t>(m_staticCount, n, 1024),
               [&](const tbb::blocked_range<std::size_t>& r) {
                 for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                  const std::size_t k = i - m_staticCount;
                   const ColliderState& c = colliders[collider[i]];
-                  const Vec3d arm = c.orientation * local[i];
+                  const Vec3d arm = c.orientation * local[k];
                   x[i] = (arm + c.position).cast<Real>();
-                  v[i] = (c.linearVelocity + c.angularVelocity.cross(arm)).cast<Real>();
+                  v[k] = (c.linearVelocity + c.angularVelocity.cross(arm)).cast<Real>();
                 }
               });
 }
 
 void BoundarySet::permute(std::size_t begin, const std::vector<std::uint32_t>& order) {
-  const std::size_t s = begin;
-  auto apply = [&](auto& field) {
-    auto copy =
-        std::vector<typename std::decay_t<decltype(field)>::value_type>(field.begin() + s, field.end());
+  const std::size_t end = begin + order.size();
+  if (!(end <= m_staticCount || begin >= m_staticCount) || end > x.size())
+    throw std::logic_error("BoundarySet::permute: the range mixes static and kinematic particles");
+  auto apply = [&](auto& field, std::size_t s) {
+    auto copy = std::vector<typename std::decay_t<decltype(field)>::value_type>(
+        field.begin() + std::ptrdiff_t(s), field.begin() + std::ptrdiff_t(s + order.size()));
     for (std::size_t k = 0; k < order.size(); ++k)
       field[s + k] = copy[order[k]];
   };
-  apply(x);
-  apply(v);
-  apply(psi);
-  apply(local);
-  apply(collider);
+  apply(x, begin);
+  apply(psi, begin);
+  apply(collider, begin);
+  if (begin >= m_staticCount) {
+    apply(v, begin - m_staticCount);
+    apply(local, begin - m_staticCount);
+  }
 }
 
 std::size_t BoundarySet::memoryBytes() const {
-  return x.capacity() * sizeof(Vec3) + v.capacity() * sizeof(Vec3) + psi.capacity() * sizeof(Real) +
-         local.capacity() * sizeof(Vec3d) + collider.capacity() * sizeof(std::uint16_t);
+  std::vector<MemoryItem> items;
+  memoryBreakdown(items);
+  std::size_t bytes = 0;
+  for (const MemoryItem& item : items)
+    bytes += item.bytes;
+  return bytes;
+}
+
+void BoundarySet::memoryBreakdown(std::vector<MemoryItem>& out) const {
+  MemoryItem xPsi{"boundary: x psi collider", 0, 0};
+  countVector(xPsi, x);
+  countVector(xPsi, psi);
+  countVector(xPsi, collider);
+  MemoryItem vel{"boundary: v (kinematic only)", 0, 0};
+  countVector(vel, v);
+  MemoryItem loc{"boundary: local (double, kinematic only)", 0, 0};
+  countVector(loc, local);
+  out.push_back(xPsi);
+  out.push_back(vel);
+  out.push_back(loc);
 }
 
 }  // namespace fp::sim

@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "sim/particle_set.h"
 #include "sim/scene.h"
 #include "sim/types.h"
 
@@ -26,13 +27,15 @@ struct ColliderState {
   std::size_t particleCount = 0;          ///< boundary particles sampled on it
 };
 
-/// Structure of arrays of the boundary particles.
+/// Structure of arrays of the boundary particles. Static particles never move: they hold no velocity (zero)
+/// nor local position, so `v` and `local` cover the kinematic particles only, particle i >= staticCount() at
+/// index i - staticCount() (velocity(i) reads any particle's).
 class BoundarySet {
  public:
   std::vector<Vec3> x;                  ///< world position [m]
-  std::vector<Vec3> v;                  ///< velocity [m/s]
+  std::vector<Vec3> v;                  ///< velocity of the kinematic particles, from staticCount() on [m/s]
   std::vector<Real> psi;                ///< Akinci volume [m^3]
-  std::vector<Vec3d> local;             ///< position in the collider frame [m]
+  std::vector<Vec3d> local;             ///< position in the collider frame, kinematic particles only [m]
   std::vector<std::uint16_t> collider;  ///< index of the owning collider
 
   /// Samples every collider with spacing 2r and support 4r, computes the volumes, orders static particles
@@ -42,16 +45,21 @@ class BoundarySet {
   std::size_t size() const { return x.size(); }
   /// particles [0, staticCount()) never move
   std::size_t staticCount() const { return m_staticCount; }
+  /// velocity of boundary particle i, zero for a static one [m/s]
+  Vec3 velocity(std::size_t i) const { return i < m_staticCount ? Vec3::Zero() : v[i - m_staticCount]; }
   /// support radius of every boundary particle [m]
   Real support() const { return m_support; }
   /// factor on psi for a fluid particle of support Hi: the pair support over the boundary's own, H_ib / H_b
   Real volumeScale(Real Hi) const { return Real(0.5) * (Hi + m_support) / m_support; }
   /// moves the kinematic particles to their colliders' current poses and sets their velocities
   void updateKinematic(const std::vector<ColliderState>& colliders);
-  /// reorders the particles from index `begin` on: new begin + k holds old begin + order[k]
+  /// reorders particles [begin, begin + order.size()): new begin + k holds old begin + order[k]; the range
+  /// lies among the static particles or among the kinematic ones
   void permute(std::size_t begin, const std::vector<std::uint32_t>& order);
   /// bytes held
   std::size_t memoryBytes() const;
+  /// appends the boundary arrays' lines to a memory breakdown
+  void memoryBreakdown(std::vector<MemoryItem>& out) const;
 
  private:
   std::size_t m_staticCount = 0;

@@ -64,7 +64,6 @@ double DfsphSolver::computeDensityAndFactor(SolverContext& ctx) {
   const Real* m = p.m.data();
   const Real* H = p.H.data();
   const Vec3* xb = ctx.boundary.x.data();
-  const Vec3* vb = ctx.boundary.v.data();
   const Real* psi = ctx.boundary.psi.data();
   const std::uint32_t* fo = ctx.fluidNbrs.offsets.data();
   const std::uint32_t* fi = ctx.fluidNbrs.indices.data();
@@ -116,7 +115,7 @@ double DfsphSolver::computeDensityAndFactor(SolverContext& ctx) {
                               gB[k] = vg;
                               const Vec3 gv = vg * xib;
                               gradSum += gv;
-                              rate += gv.dot(vi - vb[b]);
+                              rate += gv.dot(vi - ctx.boundary.velocity(b));
                             }
                             p.rho[i] = density * rho0;
                             m_rate[i] = rate;
@@ -134,7 +133,6 @@ double DfsphSolver::densityRatePass(const SolverContext& ctx, F&& stiffness) {
   const Vec3* x = p.x.data();
   const Vec3* v = p.v.data();
   const Vec3* xb = ctx.boundary.x.data();
-  const Vec3* vb = ctx.boundary.v.data();
   const std::uint32_t* fo = ctx.fluidNbrs.offsets.data();
   const std::uint32_t* fi = ctx.fluidNbrs.indices.data();
   const std::uint32_t* bo = ctx.boundaryNbrs.offsets.data();
@@ -151,7 +149,7 @@ double DfsphSolver::densityRatePass(const SolverContext& ctx, F&& stiffness) {
     }
     for (std::uint32_t k = bo[i]; k < bo[i + 1]; ++k) {
       const std::uint32_t b = bi[k];
-      rate += gB[k] * (vi - vb[b]).dot(xi - xb[b]);
+      rate += gB[k] * (vi - ctx.boundary.velocity(b)).dot(xi - xb[b]);
     }
     m_rate[i] = rate;
     return double(stiffness(i, rate));
@@ -319,7 +317,6 @@ void DfsphSolver::nonPressureForces(SolverContext& ctx, Real dtPrevious) {
   const Real* H = p.H.data();
   const Real* rho = p.rho.data();
   const Vec3* xb = ctx.boundary.x.data();
-  const Vec3* vb = ctx.boundary.v.data();
   const Real* psi = ctx.boundary.psi.data();
   const std::uint32_t* fo = ctx.fluidNbrs.offsets.data();
   const std::uint32_t* fi = ctx.fluidNbrs.indices.data();
@@ -372,7 +369,8 @@ void DfsphSolver::nonPressureForces(SolverContext& ctx, Real dtPrevious) {
       const Real sb = ctx.boundary.volumeScale(Hi);
       for (std::uint32_t q = bo[i]; q < bo[i + 1]; ++q) {
         const std::uint32_t b = bi[q];
-        ab += (cBVisc * rho0 * sb * psi[b] / rho[i] * CubicSpline::w((xi - xb[b]).norm(), hb)) * (vb[b] - vi);
+        ab += (cBVisc * rho0 * sb * psi[b] / rho[i] * CubicSpline::w((xi - xb[b]).norm(), hb)) *
+              (ctx.boundary.velocity(b) - vi);
       }
     }
     p.a[i] = ai + ab;
@@ -402,7 +400,7 @@ Real DfsphSolver::cflTimeStep(const SolverContext& ctx, Real dtPrevious) const {
       Range(b.staticCount(), b.size(), kGrain), std::numeric_limits<Real>::max(),
       [&](const Range& r, Real acc) {
         for (std::size_t k = r.begin(); k < r.end(); ++k) {
-          const Real speed = b.v[k].norm();
+          const Real speed = b.velocity(k).norm();
           if (speed > Real(0))
             acc = std::min(acc, Real(0.5) * b.support() / speed);
         }

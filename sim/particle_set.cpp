@@ -1,34 +1,42 @@
 #include "sim/particle_set.h"
 
+#include <cstring>
 #include <limits>
+#include <type_traits>
 
 #include "sim/parallel.h"
 
 namespace fp::sim {
 
 template <class F>
+void ParticleSet::forEachAdaptivityField(F&& f) {
+  f(splitTime);
+  f(levelPhi);
+  f(levelOmega);
+  f(levelNu);
+  f(mOpt);
+  f(phi);
+  f(omega);
+  f(nu);
+  f(heavySteps);
+  f(parentId);
+  f(splitAge);
+}
+
+template <class F>
 void ParticleSet::forEachField(F&& f) {
-  f(x, m_scratchVec);
-  f(v, m_scratchVec);
-  f(a, m_scratchVec);
-  f(m, m_scratchReal);
-  f(H, m_scratchReal);
-  f(rho, m_scratchReal);
-  f(kappa, m_scratchReal);
-  f(kappaV, m_scratchReal);
-  f(splitTime, m_scratchReal);
-  f(id, m_scratchU32);
-  f(flags, m_scratchU32);
-  f(levelPhi, m_scratchReal);
-  f(levelOmega, m_scratchReal);
-  f(levelNu, m_scratchReal);
-  f(mOpt, m_scratchReal);
-  f(phi, m_scratchReal);
-  f(omega, m_scratchReal);
-  f(nu, m_scratchReal);
-  f(heavySteps, m_scratchU32);
-  f(parentId, m_scratchU32);
-  f(splitAge, m_scratchU32);
+  f(x);
+  f(v);
+  f(a);
+  f(m);
+  f(H);
+  f(rho);
+  f(kappa);
+  f(kappaV);
+  f(id);
+  f(flags);
+  if (m_adaptivityFields)
+    forEachAdaptivityField(f);
 }
 
 std::size_t ParticleSet::add(const Vec3& position, const Vec3& velocity, Real mass, Real support,
@@ -41,47 +49,82 @@ std::size_t ParticleSet::add(const Vec3& position, const Vec3& velocity, Real ma
   rho.push_back(restDensity);
   kappa.push_back(0);
   kappaV.push_back(0);
-  splitTime.push_back(-1);
   id.push_back(m_nextId++);
   flags.push_back(0);
-  levelPhi.push_back(1);
-  levelOmega.push_back(1);
-  levelNu.push_back(1);
-  mOpt.push_back(mass);
-  phi.push_back(std::numeric_limits<Real>::infinity());
-  omega.push_back(0);
-  nu.push_back(0);
-  heavySteps.push_back(0);
-  parentId.push_back(kNoParent);
-  splitAge.push_back(0);
+  if (m_adaptivityFields) {
+    splitTime.push_back(-1);
+    levelPhi.push_back(1);
+    levelOmega.push_back(1);
+    levelNu.push_back(1);
+    mOpt.push_back(mass);
+    phi.push_back(std::numeric_limits<Real>::infinity());
+    omega.push_back(0);
+    nu.push_back(0);
+    heavySteps.push_back(0);
+    parentId.push_back(kNoParent);
+    splitAge.push_back(0);
+  }
   return x.size() - 1;
 }
 
+void ParticleSet::setAdaptivityFields(bool keep) {
+  if (keep == m_adaptivityFields)
+    return;
+  m_adaptivityFields = keep;
+  if (!keep) {
+    forEachAdaptivityField([](auto& field) {
+      field.clear();
+      field.shrink_to_fit();
+    });
+    return;
+  }
+  const std::size_t n = size();
+  splitTime.assign(n, Real(-1));
+  levelPhi.assign(n, Real(1));
+  levelOmega.assign(n, Real(1));
+  levelNu.assign(n, Real(1));
+  mOpt = m;
+  phi.assign(n, std::numeric_limits<Real>::infinity());
+  omega.assign(n, Real(0));
+  nu.assign(n, Real(0));
+  heavySteps.assign(n, 0u);
+  parentId.assign(n, kNoParent);
+  splitAge.assign(n, 0u);
+}
+
 void ParticleSet::clear() {
-  forEachField([](auto& field, auto&) { field.clear(); });
+  forEachField([](auto& field) { field.clear(); });
   m_nextId = 0;
 }
 
 void ParticleSet::shrinkToFit() {
-  forEachField([](auto& field, auto& scratch) {
-    field.shrink_to_fit();
-    scratch.shrink_to_fit();
-  });
+  forEachField([](auto& field) { field.shrink_to_fit(); });
+  m_scratch.shrink_to_fit();
 }
 
 void ParticleSet::reserve(std::size_t n) {
-  forEachField([n](auto& field, auto&) { field.reserve(n); });
+  forEachField([n](auto& field) { field.reserve(n); });
 }
 
 void ParticleSet::permute(const std::vector<std::uint32_t>& order) {
   const std::size_t n = order.size();
-  forEachField([&](auto& field, auto& scratch) {
-    scratch.resize(n);
-    parallelFor(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+  // every field goes through the one float buffer, copied as raw bytes (no type punning): gather, copy back
+  static_assert(sizeof(Vec3) == 3 * sizeof(Real));
+  m_scratch.resize(3 * n);
+  auto* buffer = reinterpret_cast<unsigned char*>(m_scratch.data());
+  using Range = tbb::blocked_range<std::size_t>;
+  forEachField([&](auto& field) {
+    using T = typename std::decay_t<decltype(field)>::value_type;
+    static_assert(sizeof(T) <= sizeof(Vec3) && (std::is_trivially_copyable_v<T> || std::is_same_v<T, Vec3>));
+    parallelFor(Range(0, n, 4096), [&](const Range& r) {
       for (std::size_t k = r.begin(); k < r.end(); ++k)
-        scratch[k] = field[order[k]];
+        std::memcpy(buffer + k * sizeof(T), &field[order[k]], sizeof(T));
     });
-    field.swap(scratch);
+    field.resize(n);  // `order` may keep a subset (Adaptivity drops merged particles so)
+    parallelFor(Range(0, n, 4096), [&](const Range& r) {
+      std::memcpy(static_cast<void*>(field.data() + r.begin()), buffer + r.begin() * sizeof(T),
+                  (r.end() - r.begin()) * sizeof(T));
+    });
   });
 }
 
@@ -100,32 +143,33 @@ Vec3d ParticleSet::totalMomentum() const {
 }
 
 std::size_t ParticleSet::memoryBytes() const {
+  std::vector<MemoryItem> items;
+  memoryBreakdown(items);
   std::size_t bytes = 0;
-  auto count = [&bytes](const auto& field) { bytes += field.capacity() * sizeof(field[0]); };
-  count(x);
-  count(v);
-  count(a);
-  count(m);
-  count(H);
-  count(rho);
-  count(kappa);
-  count(kappaV);
-  count(splitTime);
-  count(id);
-  count(flags);
-  count(levelPhi);
-  count(levelOmega);
-  count(levelNu);
-  count(mOpt);
-  count(phi);
-  count(omega);
-  count(nu);
-  count(heavySteps);
-  count(parentId);
-  count(splitAge);
-  bytes += m_scratchVec.capacity() * sizeof(Vec3) + m_scratchReal.capacity() * sizeof(Real) +
-           m_scratchU32.capacity() * sizeof(std::uint32_t);
+  for (const MemoryItem& item : items)
+    bytes += item.bytes;
   return bytes;
+}
+
+void ParticleSet::memoryBreakdown(std::vector<MemoryItem>& out) const {
+  MemoryItem solver{"fluid: x v a m H rho kappa kappaV id flags", 0, 0};
+  for (const auto* f : {&x, &v, &a})
+    countVector(solver, *f);
+  for (const auto* f : {&m, &H, &rho, &kappa, &kappaV})
+    countVector(solver, *f);
+  for (const auto* f : {&id, &flags})
+    countVector(solver, *f);
+  MemoryItem adaptive{
+      "fluid: adaptivity fields (splitTime levels mOpt phi omega nu heavySteps parentId splitAge)", 0, 0};
+  for (const auto* f : {&splitTime, &levelPhi, &levelOmega, &levelNu, &mOpt, &phi, &omega, &nu})
+    countVector(adaptive, *f);
+  for (const auto* f : {&heavySteps, &parentId, &splitAge})
+    countVector(adaptive, *f);
+  MemoryItem scratch{"fluid: sort scratch", 0, 0};
+  countVector(scratch, m_scratch);
+  out.push_back(solver);
+  out.push_back(adaptive);
+  out.push_back(scratch);
 }
 
 }  // namespace fp::sim

@@ -3,6 +3,7 @@
 /// are close in memory. Every particle has its own mass and support radius (multi-resolution from day one).
 
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "sim/types.h"
@@ -18,7 +19,24 @@ enum ParticleFlag : std::uint32_t {
 /// ParticleSet::parentId of a particle that blends from no parent.
 constexpr std::uint32_t kNoParent = ~std::uint32_t(0);
 
-/// Structure of arrays of the fluid particles.
+/// One line of a memory breakdown (Simulation::memoryBreakdown): bytes held (vector capacity) and the part
+/// of them in use (size); the difference is spare capacity.
+struct MemoryItem {
+  std::string name;       ///< component
+  std::size_t bytes = 0;  ///< held [B]
+  std::size_t used = 0;   ///< in use [B]
+};
+
+/// Appends a vector's capacity and size to a breakdown line.
+template <class V>
+void countVector(MemoryItem& item, const V& v) {
+  item.bytes += v.capacity() * sizeof(typename V::value_type);
+  item.used += v.size() * sizeof(typename V::value_type);
+}
+
+/// Structure of arrays of the fluid particles. The fields from splitTime on, after flags, serve the
+/// adaptivity only: the uniform modes drop them (setAdaptivityFields(false)), which saves 44 B a particle;
+/// they are then empty, and the ...Of(i) readers give their neutral values.
 class ParticleSet {
  public:
   std::vector<Vec3> x;            ///< position [m]
@@ -45,6 +63,22 @@ class ParticleSet {
 
   /// number of particles
   std::size_t size() const { return x.size(); }
+  /// true when the adaptivity fields (splitTime, levels, mOpt, phi, omega, nu, heavySteps, parentId,
+  /// splitAge) are held; the default
+  bool hasAdaptivityFields() const { return m_adaptivityFields; }
+  /// keeps the adaptivity fields (sized to the particles at their defaults when they were dropped) or drops
+  /// them (emptied, their memory released)
+  void setAdaptivityFields(bool keep);
+  /// split time of particle i, -1 (never split) without adaptivity fields [s]
+  Real splitTimeOf(std::size_t i) const { return splitTime.empty() ? Real(-1) : splitTime[i]; }
+  /// visible level of particle i, 1 (base resolution) without adaptivity fields
+  Real levelPhiOf(std::size_t i) const { return levelPhi.empty() ? Real(1) : levelPhi[i]; }
+  /// vorticity level of particle i, 1 without adaptivity fields
+  Real levelOmegaOf(std::size_t i) const { return levelOmega.empty() ? Real(1) : levelOmega[i]; }
+  /// velocity-difference level of particle i, 1 without adaptivity fields
+  Real levelNuOf(std::size_t i) const { return levelNu.empty() ? Real(1) : levelNu[i]; }
+  /// split parent of particle i, kNoParent without adaptivity fields
+  std::uint32_t parentIdOf(std::size_t i) const { return parentId.empty() ? kNoParent : parentId[i]; }
   /// appends a particle at rest density; returns its index
   std::size_t add(const Vec3& position, const Vec3& velocity, Real mass, Real support, Real restDensity);
   /// removes every particle
@@ -64,15 +98,21 @@ class ParticleSet {
   Vec3d totalMomentum() const;
   /// bytes held by the particle arrays (capacity)
   std::size_t memoryBytes() const;
+  /// appends the particle arrays' lines to a memory breakdown: solver fields, adaptivity fields, sort scratch
+  void memoryBreakdown(std::vector<MemoryItem>& out) const;
 
  private:
   friend class StateAccess;  // sim/state_io: restores the next id
+  // every field held: f(field)
   template <class F>
   void forEachField(F&& f);
+  template <class F>
+  void forEachAdaptivityField(F&& f);
   std::uint32_t m_nextId = 0;
-  std::vector<Vec3> m_scratchVec;
-  std::vector<Real> m_scratchReal;
-  std::vector<std::uint32_t> m_scratchU32;
+  bool m_adaptivityFields = true;
+  // permute()'s scratch: one buffer for every field, as large as the largest element (12 B a particle, not
+  // one vector per element type)
+  std::vector<Real> m_scratch;
 };
 
 }  // namespace fp::sim

@@ -144,13 +144,21 @@ Simulation::Simulation(const SceneDesc& scene) : m_scene(scene), m_params(scene.
     ++m_colliders[c].particleCount;
 
   m_grid.setup(m_scene.domain, m_support);
-  // static boundary particles are sorted into the grid once
-  m_grid.sort(m_boundary.x.data(), m_boundary.staticCount(), m_order, m_staticCells);
-  m_boundary.permute(0, m_order);
+  {
+    // static boundary particles are sorted into the grid once, with scratch released right after (in the
+    // small scenes they outnumber the fluid particles five times: the grid's keys and the order would keep
+    // room for them for the whole run)
+    UniformGrid once = m_grid;
+    std::vector<std::uint32_t> order;
+    once.sort(m_boundary.x.data(), m_boundary.staticCount(), order, m_staticCells);
+    m_boundary.permute(0, order);
+  }
 
   // The adaptive modes start from the coarsened lattice (createFluid); the band between fine and coarse is
   // filled in by the first adaptation steps, gradually, as during the run. (Settling it before time starts,
   // with supports set at once, left density errors of several percent.)
+  // the uniform modes never split, merge nor estimate levels: their particles hold no adaptivity fields
+  m_fluid.setAdaptivityFields(adaptive());
   createFluid();
   m_dt = Real(m_params.dtMax);
   // The split templates are built once per process on first use (0.1-0.3 s): here, not in the first step
@@ -317,6 +325,7 @@ void Simulation::coarsenInitialLattice(const std::vector<Eigen::Vector4i>& latti
   };
   std::vector<Sum> sums(static_cast<std::size_t>(groups));
   ParticleSet out;
+  out.setAdaptivityFields(m_fluid.hasAdaptivityFields());
   out.reserve(m_fluid.size());
   const Real rho0 = Real(m_params.restDensity);
   for (std::size_t i = 0; i < m_fluid.size(); ++i) {
@@ -554,7 +563,7 @@ std::size_t Simulation::assignTimeLevels(Real dt) {
   const Real cfl = Real(m_params.cflFactor);
   std::vector<std::uint8_t> candidate(n, 0);
   for (std::size_t i = 0; i < n; ++i) {
-    bool ok = m_fluid.parentId[i] == kNoParent;
+    bool ok = m_fluid.parentIdOf(i) == kNoParent;
     const Real speed = m_fluid.v[i].norm() + dt * m_fluid.a[i].norm();
     if (ok && speed > Real(0))
       ok = cfl * Real(0.5) * m_fluid.H[i] / speed >= Real(2) * dt;
@@ -718,13 +727,48 @@ double Simulation::pressure(std::size_t i) const {
 }
 
 std::size_t Simulation::memoryBytes() const {
-  return m_fluid.memoryBytes() + m_boundary.memoryBytes() + m_levels.memoryBytes() +
-         m_adaptivity.memoryBytes() + m_target.capacity() * sizeof(Real) + m_fluidNbrs.memoryBytes() +
-         m_boundaryNbrs.memoryBytes() + m_solver.memoryBytes() +
-         (m_order.capacity() + m_fluidCells.capacity() + m_staticCells.capacity() +
-          m_kinematicCells.capacity()) *
-             sizeof(std::uint32_t) +
-         m_grid.memoryBytes() + m_search.memoryBytes();
+  std::size_t bytes = 0;
+  for (const MemoryItem& item : memoryBreakdown())
+    bytes += item.bytes;
+  return bytes;
+}
+
+std::vector<MemoryItem> Simulation::memoryBreakdown() const {
+  std::vector<MemoryItem> out;
+  m_fluid.memoryBreakdown(out);
+  m_boundary.memoryBreakdown(out);
+  auto lists = [&out](const char* name, const NeighborList& list) {
+    MemoryItem item{name, 0, 0};
+    countVector(item, list.offsets);
+    countVector(item, list.indices);
+    countVector(item, list.chunkCounts);
+    out.push_back(item);
+  };
+  lists("neighbours: fluid lists", m_fluidNbrs);
+  lists("neighbours: boundary lists", m_boundaryNbrs);
+  MemoryItem held{"time levels: held particles, lists and fields", 0, 0};
+  countVector(held, m_held);
+  countVector(held, m_heldRho);
+  countVector(held, m_heldKappa);
+  countVector(held, m_heldKappaV);
+  countVector(held, m_heldNbrs.offsets);
+  countVector(held, m_heldNbrs.indices);
+  countVector(held, m_heldNbrs.chunkCounts);
+  out.push_back(held);
+  MemoryItem cells{"grid: cell ranges (fluid, static, kinematic) and sort order", 0, 0};
+  for (const auto* v : {&m_order, &m_fluidCells, &m_staticCells, &m_kinematicCells})
+    countVector(cells, *v);
+  out.push_back(cells);
+  // the members of other classes report their capacity only: their spare part is not known here
+  out.push_back({"grid: sort keys and row starts", m_grid.memoryBytes(), m_grid.memoryBytes()});
+  out.push_back({"neighbour search scratch", m_search.memoryBytes(), m_search.memoryBytes()});
+  out.push_back(
+      {"solver: per-particle scratch and per-pair caches", m_solver.memoryBytes(), m_solver.memoryBytes()});
+  MemoryItem levels{"levels: scratch and target masses", m_levels.memoryBytes(), m_levels.memoryBytes()};
+  countVector(levels, m_target);
+  out.push_back(levels);
+  out.push_back({"adaptivity scratch", m_adaptivity.memoryBytes(), m_adaptivity.memoryBytes()});
+  return out;
 }
 
 }  // namespace fp::sim

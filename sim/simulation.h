@@ -124,8 +124,11 @@ class Simulation {
   double totalMass() const { return m_fluid.totalMass(); }
   /// total fluid momentum [kg m/s]
   Vec3d totalMomentum() const { return m_fluid.totalMomentum(); }
-  /// bytes held by particles, boundaries, grid, neighbour lists and solver scratch
+  /// bytes held by particles, boundaries, grid, neighbour lists and solver scratch (the sum of
+  /// memoryBreakdown())
   std::size_t memoryBytes() const;
+  /// the bytes held, by component (fp_bench --memory prints it per fluid particle)
+  std::vector<MemoryItem> memoryBreakdown() const;
   /// mass of a fluid particle on the initial lattice, the finest mass m_fine [kg]
   Real latticeMass() const { return m_latticeMass; }
   /// the coarsest mass m_base = mass_ratio * m_fine [kg]

@@ -270,39 +270,40 @@ class StateAccess {
     std::vector<double> extra;
   };
 
-  /// every per-particle array of the fluid, in file order: f(member, name)
+  /// every per-particle array of the fluid, in file order: f(member, name, adaptivity field: empty in the
+  /// uniform modes)
   template <class F>
   static void particleArrays(F&& f) {
-    f(&ParticleSet::x, "positions");
-    f(&ParticleSet::v, "velocities");
-    f(&ParticleSet::a, "accelerations");
-    f(&ParticleSet::m, "masses");
-    f(&ParticleSet::H, "support radii");
-    f(&ParticleSet::rho, "densities");
-    f(&ParticleSet::kappa, "density stiffness");
-    f(&ParticleSet::kappaV, "divergence stiffness");
-    f(&ParticleSet::splitTime, "split times");
-    f(&ParticleSet::id, "ids");
-    f(&ParticleSet::flags, "flags");
-    f(&ParticleSet::levelPhi, "visible levels");
-    f(&ParticleSet::levelOmega, "vorticity levels");
-    f(&ParticleSet::levelNu, "velocity-difference levels");
-    f(&ParticleSet::mOpt, "optimal masses");
-    f(&ParticleSet::phi, "surface distances");
-    f(&ParticleSet::omega, "vorticities");
-    f(&ParticleSet::nu, "velocity differences");
-    f(&ParticleSet::heavySteps, "split delays");
-    f(&ParticleSet::parentId, "split parent ids");
-    f(&ParticleSet::splitAge, "split ages");
+    f(&ParticleSet::x, "positions", false);
+    f(&ParticleSet::v, "velocities", false);
+    f(&ParticleSet::a, "accelerations", false);
+    f(&ParticleSet::m, "masses", false);
+    f(&ParticleSet::H, "support radii", false);
+    f(&ParticleSet::rho, "densities", false);
+    f(&ParticleSet::kappa, "density stiffness", false);
+    f(&ParticleSet::kappaV, "divergence stiffness", false);
+    f(&ParticleSet::splitTime, "split times", true);
+    f(&ParticleSet::id, "ids", false);
+    f(&ParticleSet::flags, "flags", false);
+    f(&ParticleSet::levelPhi, "visible levels", true);
+    f(&ParticleSet::levelOmega, "vorticity levels", true);
+    f(&ParticleSet::levelNu, "velocity-difference levels", true);
+    f(&ParticleSet::mOpt, "optimal masses", true);
+    f(&ParticleSet::phi, "surface distances", true);
+    f(&ParticleSet::omega, "vorticities", true);
+    f(&ParticleSet::nu, "velocity differences", true);
+    f(&ParticleSet::heavySteps, "split delays", true);
+    f(&ParticleSet::parentId, "split parent ids", true);
+    f(&ParticleSet::splitAge, "split ages", true);
   }
-  /// every per-particle array of the boundary, in file order: f(member, name)
+  /// every per-particle array of the boundary, in file order: f(member, name, kinematic particles only)
   template <class F>
   static void boundaryArrays(F&& f) {
-    f(&BoundarySet::x, "boundary positions");
-    f(&BoundarySet::v, "boundary velocities");
-    f(&BoundarySet::psi, "boundary volumes");
-    f(&BoundarySet::local, "boundary local positions");
-    f(&BoundarySet::collider, "boundary colliders");
+    f(&BoundarySet::x, "boundary positions", false);
+    f(&BoundarySet::v, "boundary velocities", true);
+    f(&BoundarySet::psi, "boundary volumes", false);
+    f(&BoundarySet::local, "boundary local positions", true);
+    f(&BoundarySet::collider, "boundary colliders", false);
   }
   /// a collider's pose (Pose or ColliderState): position, orientation (w, x, y, z), velocities
   template <class Io, class P>
@@ -333,8 +334,8 @@ class StateAccess {
     for (const ColliderState& c : sim.m_colliders)
       poseFields(w, c);
     w.put(sim.m_fluid.m_nextId);
-    particleArrays([&](auto member, const char* what) { w.array(sim.m_fluid.*member, what); });
-    boundaryArrays([&](auto member, const char* what) { w.array(sim.m_boundary.*member, what); });
+    particleArrays([&](auto member, const char* what, bool) { w.array(sim.m_fluid.*member, what); });
+    boundaryArrays([&](auto member, const char* what, bool) { w.array(sim.m_boundary.*member, what); });
     runFields(w, sim.m_run);
     lastStepFields(w, sim.m_last);
     w.putArray(extra);
@@ -431,11 +432,13 @@ class StateAccess {
     }
 
     ParticleSet& f = s.fluid;
+    const bool adaptivityFields = sim.m_fluid.hasAdaptivityFields();
+    f.setAdaptivityFields(adaptivityFields);
     s.nextId = r.get<std::uint32_t>("the particle ids");
-    particleArrays([&](auto member, const char* what) { r.array(f.*member, what); });
+    particleArrays([&](auto member, const char* what, bool) { r.array(f.*member, what); });
     const std::size_t n = f.x.size();
-    particleArrays([&](auto member, const char*) {
-      if ((f.*member).size() != n)
+    particleArrays([&](auto member, const char*, bool adaptivity) {
+      if ((f.*member).size() != (adaptivity && !adaptivityFields ? 0 : n))
         throw StateError("corrupt: particle fields of different lengths");
     });
     if (n == 0)
@@ -461,10 +464,11 @@ class StateAccess {
     }
 
     BoundarySet& b = s.boundary;
-    boundaryArrays([&](auto member, const char* what) { r.array(b.*member, what); });
+    boundaryArrays([&](auto member, const char* what, bool) { r.array(b.*member, what); });
     const std::size_t nb = sim.m_boundary.size();
-    boundaryArrays([&](auto member, const char*) {
-      if ((b.*member).size() != nb)
+    const std::size_t nStatic = sim.m_boundary.staticCount();
+    boundaryArrays([&](auto member, const char*, bool kinematic) {
+      if ((b.*member).size() != (kinematic ? nb - nStatic : nb))
         throw StateError("saved with another number of boundary particles than the scene has");
     });
     for (std::uint16_t c : b.collider) {
@@ -504,7 +508,8 @@ class StateAccess {
     }
     sim.m_fluid = std::move(s.fluid);
     sim.m_fluid.m_nextId = s.nextId;
-    boundaryArrays([&](auto member, const char*) { sim.m_boundary.*member = std::move(s.boundary.*member); });
+    boundaryArrays(
+        [&](auto member, const char*, bool) { sim.m_boundary.*member = std::move(s.boundary.*member); });
     sim.m_run = s.run;
     sim.m_last = s.last;
     // Neighbour lists valid for the restored particles, as after a step (readers such as the splash use

@@ -30,8 +30,9 @@ class StateError : public InputError {
   explicit StateError(const std::string& what) : InputError(what) {}
 };
 
-/// version of the format written by this build
-constexpr std::uint32_t kStateVersion = 2;
+/// version of the format written by this build (3: the uniform modes store no adaptivity fields, and static
+/// boundary particles no velocity nor local position; files of version 2 are refused with the version)
+constexpr std::uint32_t kStateVersion = 3;
 
 /// FNV-1a hash of what a simulation is built from: domain, fluid blocks, colliders (meshes included),
 /// parameters as loaded, mode and frame rate (not the name nor the default run length)

@@ -74,6 +74,7 @@ struct Options {
   std::vector<std::string> sets;  ///< --set KEY=VALUE over the scene's parameters
   bool suite = false;             ///< --suite: the rows of issue #12
   double handTime = 1.0;          ///< --hand-time: simulated seconds of each hand-tank run of the suite
+  bool memory = false;            ///< --memory: bytes per fluid particle by component, the suite's scenes
 };
 
 std::vector<int> parseThreadList(const std::string& text) {
@@ -143,6 +144,10 @@ struct CommandLine {
     line.addPositive(
         "--hand-time", [this](double s) { o.handTime = s; },
         "simulated seconds of each hand-tank run of --suite (default 1.0; the recorded hand lasts 1.25 s)");
+    app.add_flag("--memory", o.memory,
+                 "bytes per fluid particle by component (issue #12) for the suite's scenes: hand tank at "
+                 "r = 5 mm and as shipped (--hand-time, 2 threads), reference dam break (--sim-time, default "
+                 "0.1 s here; memory does not depend on the load)");
     app.footer("Exit codes: 0 ok, 2 bad command line, 3 bad scene or output, 4 simulation unstable.");
   }
 };
@@ -580,6 +585,103 @@ void printSuite(std::ostream& out, const std::vector<SuiteRow>& rows, double dam
   }
 }
 
+// ---- --memory: bytes per fluid particle by component ----
+
+/// The breakdown of one scene at the end of its run.
+struct MemoryColumn {
+  std::string name;
+  std::size_t particles = 0;
+  std::size_t boundary = 0;
+  std::size_t pairs = 0;  ///< fluid + boundary neighbour pairs of the last step
+  std::vector<fp::sim::MemoryItem> items;
+};
+
+MemoryColumn memoryOf(const std::string& name, const fp::sim::Simulation& simulation) {
+  MemoryColumn c;
+  c.name = name;
+  c.particles = simulation.particles().size();
+  c.boundary = simulation.boundary().size();
+  c.pairs = simulation.fluidNeighbors().indices.size() + simulation.boundaryNeighbors().indices.size();
+  c.items = simulation.memoryBreakdown();
+  return c;
+}
+
+MemoryColumn memoryOfHandTank(const std::string& name, double radius, double simTime) {
+  const fp::engine::ThreadLimit limit(2);
+  fp::engine::CliOptions o;
+  o.headless = true;
+  o.scenePath = kHandScene;
+  o.handScript = kHandScript;
+  o.simTime = simTime;
+  o.threads = 2;
+  o.quiet = true;
+  if (radius > 0)
+    o.sets.push_back("particle_radius=" + std::to_string(radius));
+  std::cerr << "run: " << name << ", 2 threads, " << simTime << " s to simulate\n";
+  std::ostringstream sink;
+  MemoryColumn c;
+  const fp::engine::RunSummary s = fp::engine::runHeadless(
+      o, sink, sink,
+      [&](int, const fp::sim::Simulation& simulation, const auto&) { c = memoryOf(name, simulation); });
+  if (s.status != "ok")
+    throw fp::sim::InstabilityError(s.message);
+  return c;
+}
+
+MemoryColumn memoryOfDamBreak(double simTime) {
+  const fp::engine::ThreadLimit limit(2);
+  fp::sim::Simulation simulation(fp::engine::loadScene(kDefaultScene));
+  std::cerr << "run: dam_break_hires, 2 threads, " << simTime << " s to simulate\n";
+  while (simulation.time() < simTime - 1e-12)
+    simulation.step();
+  return memoryOf("dam_break_hires", simulation);
+}
+
+void printMemory(std::ostream& out, const std::vector<MemoryColumn>& columns) {
+  char text[320];
+  out << "bytes per fluid particle (held = vector capacity; spare = held beyond the size, where known)\n";
+  std::snprintf(text, sizeof(text), "  %-66s", "component");
+  out << text;
+  for (const MemoryColumn& c : columns) {
+    std::snprintf(text, sizeof(text), " %18s", c.name.c_str());
+    out << text;
+  }
+  out << "\n";
+  std::vector<double> total(columns.size(), 0.0), spare(columns.size(), 0.0);
+  for (std::size_t k = 0; k < columns.front().items.size(); ++k) {
+    std::snprintf(text, sizeof(text), "  %-66s", columns.front().items[k].name.c_str());
+    out << text;
+    for (std::size_t c = 0; c < columns.size(); ++c) {
+      const fp::sim::MemoryItem& item = columns[c].items[k];
+      const double n = double(std::max<std::size_t>(columns[c].particles, 1));
+      total[c] += double(item.bytes) / n;
+      spare[c] += double(item.bytes - item.used) / n;
+      std::snprintf(text, sizeof(text), " %8.1f (%5.1f sp)", double(item.bytes) / n,
+                    double(item.bytes - item.used) / n);
+      out << text;
+    }
+    out << "\n";
+  }
+  auto row = [&](const char* name, auto value) {
+    std::snprintf(text, sizeof(text), "  %-66s", name);
+    out << text;
+    for (std::size_t c = 0; c < columns.size(); ++c) {
+      std::snprintf(text, sizeof(text), " %18s", value(c).c_str());
+      out << text;
+    }
+    out << "\n";
+  };
+  row("total bytes per fluid particle", [&](std::size_t c) { return format(total[c], 1); });
+  row("of which spare capacity", [&](std::size_t c) { return format(spare[c], 1); });
+  row("fluid particles", [&](std::size_t c) { return std::to_string(columns[c].particles); });
+  row("boundary particles per fluid particle", [&](std::size_t c) {
+    return format(double(columns[c].boundary) / double(std::max<std::size_t>(columns[c].particles, 1)), 2);
+  });
+  row("neighbour pairs per fluid particle", [&](std::size_t c) {
+    return format(double(columns[c].pairs) / double(std::max<std::size_t>(columns[c].particles, 1)), 1);
+  });
+}
+
 /// The comparison only makes sense for the reference's own scene: the hires dam break.
 bool isHiresScene(const std::string& path) {
   return std::filesystem::path(path).filename() == "dam_break_hires.json";
@@ -592,6 +694,26 @@ int main(int argc, char** argv) {
   if (const std::optional<int> exit = command.line.parse(argc, argv))
     return *exit;
   const Options& options = command.o;
+  if (options.memory) {
+    std::vector<MemoryColumn> columns;
+    try {
+      std::cout << "fp_bench --memory: issue #12's scenes\n";
+      columns.push_back(memoryOfHandTank("hand_tank_r5mm", kFingerRadius, options.handTime));
+      columns.push_back(memoryOfHandTank("hand_tank_shipped", 0.0, options.handTime));
+      columns.push_back(memoryOfDamBreak(options.simTime.value_or(0.1)));
+    } catch (const std::invalid_argument& e) {
+      std::cerr << fp::engine::usageErrorLine("fp_bench", e.what()) << "\n";
+      return kExitUsage;
+    } catch (const fp::sim::InputError& e) {
+      std::cerr << "fp_bench: " << e.what() << "\n";
+      return kExitInput;
+    } catch (const fp::sim::InstabilityError& e) {
+      std::cerr << "fp_bench: unstable: " << e.what() << "\n";
+      return kExitUnstable;
+    }
+    printMemory(std::cout, columns);
+    return kExitOk;
+  }
   if (options.suite) {
     const double damTime = options.simTime.value_or(kDefaultSimTime);
     std::vector<SuiteRow> rows;

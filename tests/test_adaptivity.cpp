@@ -378,6 +378,7 @@ TEST(LevelsTest, SurfaceOfARestingBlockIsItsTopFaceAndPhiGrowsWithDepthSmall) {
   Simulation sim(scene);
   sim.step();  // uniform resolution: the lists of the step still index the particles
   ParticleSet p = sim.particles();
+  p.setAdaptivityFields(true);  // a uniform run holds none: the estimator's fields at their defaults
   const Real r = Real(scene.params.particleRadius);
   Real top = 0;
   for (const Vec3& x : p.x)
@@ -451,6 +452,7 @@ TEST(LevelsTest, PhiStaysTheExactSurfaceDistanceStepAfterStepSmall) {
   sim.step();
   ASSERT_TRUE(sim.neighborsValid());
   ParticleSet p = sim.particles();
+  p.setAdaptivityFields(true);  // a uniform run holds none: the estimator's fields at their defaults
   const Real r = Real(scene.params.particleRadius);
   Real top = 0;
   for (const Vec3& x : p.x)

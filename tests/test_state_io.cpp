@@ -94,7 +94,7 @@ TEST_P(StateIo, ResumedRunIsBitIdenticalOnOneThread) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Modes, StateIo,
-                         ::testing::Values(sim::AdaptivityMode::UniformHigh,
+                         ::testing::Values(sim::AdaptivityMode::UniformHigh, sim::AdaptivityMode::UniformLow,
                                            sim::AdaptivityMode::FluidPlaying));
 
 /// a saved state of a few steps, and the simulation to load it into
@@ -158,6 +158,9 @@ TEST(StateIoErrors, CorruptMagicVersionHashAndBytes) {
   bad = s.bytes;
   bad[8] = char(sim::kStateVersion + 1);
   expectRefused(bad, target, "version");
+  // version 2 (before issue #12's memory work) stored every adaptivity field and the walls' velocities
+  bad[8] = 2;
+  expectRefused(bad, target, "state file version 2, this build reads version 3");
   bad = s.bytes;
   bad[12] ^= 1;  // the scene hash
   expectRefused(bad, target);
