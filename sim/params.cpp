@@ -75,7 +75,7 @@ ParamTable::ParamTable() : ParamTableOf<SimParams>("parameter", &ParamTable::val
       &P::adaptationPeriod, 1);
   add("levels_period", "adaptivity", "-", 1, 100, live,
       "adaptation steps between computations of the levels (the optimal masses in between are kept)",
-      &P::levelsPeriod, 4);
+      &P::levelsPeriod, 8);
   add("cfl_limited_refinement", "adaptivity", "-", 0, 1, live,
       "vorticity and velocity difference refine a particle only as far as keeps the time step the surface "
       "allows",
