@@ -154,17 +154,30 @@ void Adaptivity::planSplit(const AdaptContext& ctx, SplitPlan& plan) const {
     if (sdf.atCentre() - reach < 2.002 * childRadius)
       walls.push_back({&col, local, std::move(sdf)});
   }
+  // A child must keep one of its own spacings from the wall surface. Two bounds decide most children without
+  // a query, each exactly as the query would: the signed distance is at most the distance to a surface point
+  // (a child that near the surface point closest to the parent is too near), and at least the parent's less
+  // the child's offset (1-Lipschitz: a child that near the parent keeps the clearance). Margins leave the
+  // cases within round-off of a bound to the query. All children are first checked against the bounds, so a
+  // candidate with a child in the wall is mostly rejected before any query (blocked splits are planned again
+  // every step).
+  const double clearance = 2.0 * childRadius;
+  thread_local std::vector<Vec3d> undecided;
   auto valid = [&](const std::vector<Vec3>& children) {
     for (const NearCollider& wall : walls) {
       const Quatd toLocal = wall.state->orientation.conjugate();
+      Vec3d surface;
+      const bool hasSurface = wall.sdf.surfacePoint(surface);
+      undecided.clear();
       for (const Vec3& xs : children) {
-        // a child must keep one of its own spacings from the wall surface
         const Vec3d q = toLocal * (xs.cast<double>() - wall.state->position);
-        // (1-Lipschitz again: a child nearer the parent than the parent's distance less the clearance keeps
-        // the clearance; the margin leaves the cases within round-off of it to the query)
-        if (wall.sdf.atCentre() - (q - wall.centre).norm() >= 2.0 * childRadius + 1e-9)
-          continue;
-        if (wall.sdf(q) < 2.0 * childRadius)
+        if (hasSurface && (q - surface).norm() < clearance - 1e-9)
+          return false;
+        if (wall.sdf.atCentre() - (q - wall.centre).norm() < clearance + 1e-9)
+          undecided.push_back(q);
+      }
+      for (const Vec3d& q : undecided) {
+        if (wall.sdf(q) < clearance)
           return false;
       }
     }

@@ -19,6 +19,8 @@ ParamTable::ParamTable() : ParamTableOf<SimParams>("parameter", &ParamTable::val
       "XSPH viscosity: share of the velocity difference smoothed per step", &P::viscosity, 0.01);
   add("boundary_viscosity", "fluid", "-", 0.0, 1.0, live, "XSPH friction against boundaries",
       &P::boundaryViscosity, 0.0);
+  add("laminar_viscosity", "fluid", "m^2/s", 0.0, 1.0, live,
+      "kinematic viscosity nu of a laminar (Laplacian) viscosity, 0 = off", &P::laminarViscosity, 0.0);
   add("surface_tension", "fluid", "-", 0.0, 10.0, live,
       "Akinci 2013 cohesion + curvature coefficient, 0 = off", &P::surfaceTension, 0.0);
   // time stepping
@@ -73,7 +75,7 @@ ParamTable::ParamTable() : ParamTableOf<SimParams>("parameter", &ParamTable::val
       &P::adaptationPeriod, 1);
   add("levels_period", "adaptivity", "-", 1, 100, live,
       "adaptation steps between computations of the levels (the optimal masses in between are kept)",
-      &P::levelsPeriod, 4);
+      &P::levelsPeriod, 8);
   add("cfl_limited_refinement", "adaptivity", "-", 0, 1, live,
       "vorticity and velocity difference refine a particle only as far as keeps the time step the surface "
       "allows",

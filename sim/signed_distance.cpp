@@ -322,6 +322,7 @@ BallSdf::BallSdf(const ColliderDesc& collider, const Vec3d& localCentre, double 
   // farther than that from q, so it is never q's closest (the tolerance keeps the pseudo-normal's ties).
   m_subsets.resize(m_data->components.size());
   m_centre = std::numeric_limits<double>::infinity();
+  double nearest = std::numeric_limits<double>::infinity();
   for (std::size_t k = 0; k < m_data->components.size(); ++k) {
     const std::vector<std::uint32_t>& tris = m_data->components[k];
     thread_local std::vector<double> distance2;
@@ -333,6 +334,11 @@ BallSdf::BallSdf(const ColliderDesc& collider, const Vec3d& localCentre, double 
           closestOnTriangle(localCentre, mesh.vertices[tri[0]], mesh.vertices[tri[1]], mesh.vertices[tri[2]]);
       distance2[t] = (c.point - localCentre).squaredNorm();
       best = std::min(best, distance2[t]);
+      if (distance2[t] < nearest) {
+        nearest = distance2[t];
+        m_surfacePoint = c.point;
+        m_hasSurfacePoint = true;
+      }
     }
     const double reach = std::sqrt(best) + 2.0 * radius + 4.0 * m_data->tolerance;
     for (std::size_t t = 0; t < tris.size(); ++t) {

@@ -47,12 +47,21 @@ class BallSdf {
   double atCentre() const { return m_centre; }
   /// the signed distance at a point within `radius` of the centre [m]
   double operator()(const Vec3d& localPoint) const;
+  /// a point of the surface nearest the centre (collider frame), for meshes; false for the other shapes. The
+  /// signed distance at any point q is at most |q - surfacePoint| (exactly the distance outside, negative
+  /// inside).
+  bool surfacePoint(Vec3d& point) const {
+    point = m_surfacePoint;
+    return m_hasSurfacePoint;
+  }
 
  private:
   const ColliderDesc* m_collider;
   std::shared_ptr<const MeshSdfData> m_data;          // meshes only
   std::vector<std::vector<std::uint32_t>> m_subsets;  // per component: the triangles that can be closest
   double m_centre = 0.0;
+  Vec3d m_surfacePoint = Vec3d::Zero();
+  bool m_hasSurfacePoint = false;
 };
 
 }  // namespace fp::sim
