@@ -171,11 +171,14 @@ TEST(XrApp, RecordedHandsPushTheWaterAndAHeadlessReplayIsBitIdentical) {
   for (const char* key : {"steps", "sim_seconds", "particles_final", "mass_final", "momentum_final",
                           "density_error_mean", "density_error_max", "density_iterations_mean"})
     EXPECT_EQ(a.at(key).dump(), b.at(key).dump()) << key;
-  // the push: 0.60 kg m/s along +x measured, against 0.04 and -0.12 sideways
+  // the push: 0.52 kg m/s along +x measured, against 0.14 up and -0.18 sideways (0.60, 0.04, -0.12 while the
+  // divergence solve skipped particles with fewer than 20 neighbours: in these 288 coarse particles the
+  // volume criterion now also corrects the surface layers the hands lift, so more of the push goes up and
+  // sideways)
   const nlohmann::json& p = a.at("momentum_final");
   EXPECT_GT(double(p[0]), 0.3) << p.dump();
-  EXPECT_GT(double(p[0]), 3.0 * std::abs(double(p[1]))) << p.dump();
-  EXPECT_GT(double(p[0]), 3.0 * std::abs(double(p[2]))) << p.dump();
+  EXPECT_GT(double(p[0]), 2.0 * std::abs(double(p[1]))) << p.dump();
+  EXPECT_GT(double(p[0]), 2.0 * std::abs(double(p[2]))) << p.dump();
 }
 
 // Without hand tracking the controllers drive the same hands: their grip poses follow the recording's palms
