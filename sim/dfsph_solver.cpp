@@ -13,12 +13,18 @@ namespace {
 
 constexpr std::size_t kGrain = 1024;  // fixed grain: reductions split the same way whatever the thread count
 constexpr Real kEps = Real(1e-6);
-// Divergence solve only where the neighbourhood is full: the particle's own volume sum sum_j V_j W_ij (its
-// density over the rest density, boundary included) at least this. SPlisHSPlasH counts neighbours (20 in 3D),
-// which skips a fine interior particle next to coarse ones (about 10 neighbours, each of many times its
-// volume); 0.72 is the ratio that best reproduces the 20-neighbour rule on a uniform tank at rest
+// Divergence solve only where the neighbourhood is full by volume: the particle's own volume sum sum_j V_j
+// W_ij (its density over the rest density, boundary included) at least this. SPlisHSPlasH counts neighbours
+// (20 in 3D), which skips a fine interior particle next to coarse ones (about 10 neighbours, each of many
+// times its volume); 0.72 is the ratio that best reproduces the 20-neighbour rule on a uniform tank at rest
 // (docs/method.md, Divergence solve).
 constexpr Real kMinDensityRatioForDivergence = Real(0.72);
+// The divergence solve's warm start only where the neighbourhood is also full by count: at least this many
+// neighbours, fluid and boundary, each fluid one counted as its mass over the particle's own (SPlisHSPlasH's
+// count at one mass). The volume rule also solves spray that has just reached a wall (3 fluid and 13 wall
+// neighbours read rho0): the stiffness that stopped it belongs to the impact, and half of it applied again in
+// the next step threw the particle back faster than it came (mechanical energy gained in the dam break).
+constexpr Real kMinNeighborsForWarmStart = Real(20);
 
 using Range = tbb::blocked_range<std::size_t>;
 
@@ -54,6 +60,7 @@ double DfsphSolver::computeDensityAndFactor(SolverContext& ctx) {
   const std::size_t n = p.size();
   m_factor.resize(n);
   m_rate.resize(n);
+  m_full.resize(n);
   resizeCache(m_gradF, ctx.fluidNbrs.indices.size());
   resizeCache(m_gradB, ctx.boundaryNbrs.indices.size());
   const Real rho0 = Real(ctx.params.restDensity);
@@ -84,8 +91,10 @@ double DfsphSolver::computeDensityAndFactor(SolverContext& ctx) {
                             Vec3 gradSum = Vec3::Zero();
                             Real sqSum = 0;
                             Real rate = 0;
+                            Real neighborMass = 0;
                             for (std::uint32_t k = fo[i]; k < fo[i + 1]; ++k) {
                               const std::uint32_t j = fi[k];
+                              neighborMass += m[j];
                               const Vec3 xij = xi - x[j];
                               Real w, g;
                               CubicSpline::evaluate(xij.norm(), pairSupport(Hi, H[j]), w, g);
@@ -119,6 +128,11 @@ double DfsphSolver::computeDensityAndFactor(SolverContext& ctx) {
                             }
                             p.rho[i] = density * rho0;
                             m_rate[i] = rate;
+                            // the count, with half a neighbour of margin: equal masses give the integer count
+                            // whatever the rounding of their sum
+                            const Real boundaryCount = Real(bo[i + 1] - bo[i]);
+                            m_full[i] = neighborMass >=
+                                        (kMinNeighborsForWarmStart - Real(0.5) - boundaryCount) * m[i];
                             const Real denom = gradSum.squaredNorm() + sqSum;
                             m_factor[i] = denom > kEps ? Real(1) / denom : Real(0);
                             return double(std::max(density - Real(1), Real(0)));
@@ -199,6 +213,7 @@ SolveResult DfsphSolver::divergenceSolve(SolverContext& ctx, Real dt) {
   if (n == 0)
     return {};
   m_k.resize(n);
+  const std::uint8_t* full = m_full.data();
   const Real* rho = p.rho.data();
   const Real* factor = m_factor.data();
   Real* kv = p.kappaV.data();
@@ -211,11 +226,12 @@ SolveResult DfsphSolver::divergenceSolve(SolverContext& ctx, Real dt) {
   };
   const double tolerance = ctx.params.divergenceTolerance * 0.01;
   const Real invDt = Real(1) / dt;
-  // the density pass left the rate of the current velocities in m_rate
+  // the density pass left the rate of the current velocities in m_rate; the warm start skips particles whose
+  // neighbourhood is sparse by count (kMinNeighborsForWarmStart)
   if (ctx.params.warmStart) {
     parallelFor(Range(0, n, kGrain), [&](const Range& r) {
       for (std::size_t i = r.begin(); i < r.end(); ++i) {
-        m_k[i] = clampRate(i, m_rate[i]) > 0 ? Real(0.5) * kv[i] * invDt : Real(0);
+        m_k[i] = full[i] && clampRate(i, m_rate[i]) > 0 ? Real(0.5) * kv[i] * invDt : Real(0);
         kv[i] = 0;
       }
     });
@@ -463,6 +479,7 @@ void DfsphSolver::resizeCache(std::vector<Real>& cache, std::size_t n) {
 void DfsphSolver::shrinkToFit() {
   for (std::vector<Real>* v : {&m_factor, &m_rate, &m_k, &m_gradF, &m_gradB, &m_viscRate})
     v->shrink_to_fit();
+  m_full.shrink_to_fit();
   m_normal.shrink_to_fit();
 }
 
@@ -470,7 +487,7 @@ std::size_t DfsphSolver::memoryBytes() const {
   return (m_factor.capacity() + m_rate.capacity() + m_k.capacity() + m_gradF.capacity() + m_gradB.capacity() +
           m_viscRate.capacity()) *
              sizeof(Real) +
-         m_normal.capacity() * sizeof(Vec3);
+         m_full.capacity() + m_normal.capacity() * sizeof(Vec3);
 }
 
 }  // namespace fp::sim

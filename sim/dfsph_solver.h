@@ -4,6 +4,7 @@
 /// boundary particles. Written in densities normalised by rho0 and volumes V_j = m_j / rho0, so that the
 /// symmetric pair update dv_i = -dt (k_i + k_j) V_j grad W_ij conserves momentum exactly (m_i V_j = m_j V_i).
 
+#include <cstdint>
 #include <vector>
 
 #include "sim/boundary_set.h"
@@ -70,13 +71,14 @@ class DfsphSolver {
   /// impulse
   Vec3d applyStiffness(SolverContext& ctx, Real dt, std::vector<Real>& accumulated);
 
-  std::vector<Real> m_factor;    // alpha_i [m^2]
-  std::vector<Real> m_rate;      // density rate or predicted density (normalised)
-  std::vector<Real> m_k;         // stiffness of the current iteration [m^2/s^2]
-  std::vector<Vec3> m_normal;    // surface-tension normals [-]
-  std::vector<Real> m_gradF;     // V_j grad W_ij / (x_i - x_j) per fluid pair of this step [1/m^2]
-  std::vector<Real> m_gradB;     // the same per boundary pair, with the boundary's scaled volume [1/m^2]
-  std::vector<Real> m_viscRate;  // laminar viscosity's damping rate D_i of this step [1/s]
+  std::vector<Real> m_factor;        // alpha_i [m^2]
+  std::vector<Real> m_rate;          // density rate or predicted density (normalised)
+  std::vector<Real> m_k;             // stiffness of the current iteration [m^2/s^2]
+  std::vector<std::uint8_t> m_full;  // 1 where the neighbourhood is full by count (divergence warm start)
+  std::vector<Vec3> m_normal;        // surface-tension normals [-]
+  std::vector<Real> m_gradF;         // V_j grad W_ij / (x_i - x_j) per fluid pair of this step [1/m^2]
+  std::vector<Real> m_gradB;         // the same per boundary pair, with the boundary's scaled volume [1/m^2]
+  std::vector<Real> m_viscRate;      // laminar viscosity's damping rate D_i of this step [1/s]
   Vec3d m_boundaryImpulse = Vec3d::Zero();
   Vec3d m_boundaryForce = Vec3d::Zero();
 };
