@@ -37,7 +37,8 @@ class DfsphSolver {
   double computeDensityAndFactor(SolverContext& ctx);
   /// divergence-free solve (Algorithm 2 of Bender & Koschier 2017) for step size dt
   SolveResult divergenceSolve(SolverContext& ctx, Real dt);
-  /// gravity, XSPH viscosity over a step of dtPrevious and surface tension (Akinci 2013) into fluid.a
+  /// gravity, XSPH viscosity over a step of dtPrevious, laminar viscosity and surface tension (Akinci 2013)
+  /// into fluid.a
   void nonPressureForces(SolverContext& ctx, Real dtPrevious);
   /// CFL step: cfl * min_i(2 r_i / |v_i + a_i dt|), clamped to [dt_min, dt_max]; moving boundary particles
   /// count with their velocity and the boundary's 2 r
@@ -69,12 +70,13 @@ class DfsphSolver {
   /// impulse
   Vec3d applyStiffness(SolverContext& ctx, Real dt, std::vector<Real>& accumulated);
 
-  std::vector<Real> m_factor;  // alpha_i [m^2]
-  std::vector<Real> m_rate;    // density rate or predicted density (normalised)
-  std::vector<Real> m_k;       // stiffness of the current iteration [m^2/s^2]
-  std::vector<Vec3> m_normal;  // surface-tension normals [-]
-  std::vector<Real> m_gradF;   // V_j grad W_ij / (x_i - x_j) per fluid pair of this step [1/m^2]
-  std::vector<Real> m_gradB;   // the same per boundary pair, with the boundary's scaled volume [1/m^2]
+  std::vector<Real> m_factor;    // alpha_i [m^2]
+  std::vector<Real> m_rate;      // density rate or predicted density (normalised)
+  std::vector<Real> m_k;         // stiffness of the current iteration [m^2/s^2]
+  std::vector<Vec3> m_normal;    // surface-tension normals [-]
+  std::vector<Real> m_gradF;     // V_j grad W_ij / (x_i - x_j) per fluid pair of this step [1/m^2]
+  std::vector<Real> m_gradB;     // the same per boundary pair, with the boundary's scaled volume [1/m^2]
+  std::vector<Real> m_viscRate;  // laminar viscosity's damping rate D_i of this step [1/s]
   Vec3d m_boundaryImpulse = Vec3d::Zero();
   Vec3d m_boundaryForce = Vec3d::Zero();
 };

@@ -19,6 +19,8 @@ ParamTable::ParamTable() : ParamTableOf<SimParams>("parameter", &ParamTable::val
       "XSPH viscosity: share of the velocity difference smoothed per step", &P::viscosity, 0.01);
   add("boundary_viscosity", "fluid", "-", 0.0, 1.0, live, "XSPH friction against boundaries",
       &P::boundaryViscosity, 0.0);
+  add("laminar_viscosity", "fluid", "m^2/s", 0.0, 1.0, live,
+      "kinematic viscosity nu of a laminar (Laplacian) viscosity, 0 = off", &P::laminarViscosity, 0.0);
   add("surface_tension", "fluid", "-", 0.0, 10.0, live,
       "Akinci 2013 cohesion + curvature coefficient, 0 = off", &P::surfaceTension, 0.0);
   // time stepping

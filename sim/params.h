@@ -27,6 +27,7 @@ struct SimParams {
   std::array<double, 3> gravity;
   double viscosity;
   double boundaryViscosity;
+  double laminarViscosity;
   double surfaceTension;
   // time stepping
   double cflFactor;

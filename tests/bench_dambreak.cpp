@@ -4,7 +4,7 @@
 /// reference measured on this machine.
 ///
 ///   fp_bench [--scene FILE] [--sim-time S] [--threads LIST] [--csv FILE] [--quick] [--set KEY=VALUE]...
-///   [--help]
+///   [--speed-log S] [--help]
 ///   fp_bench --suite [--sim-time S] [--hand-time S] [--csv FILE]
 ///
 /// --suite measures the rows of issue #12 in one run: the hand tank at r = 5 mm (fluidplaying, the recorded
@@ -19,6 +19,7 @@
 #include <fstream>
 #include <functional>
 #include <iostream>
+#include <limits>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
@@ -74,6 +75,7 @@ struct Options {
   std::vector<std::string> sets;  ///< --set KEY=VALUE over the scene's parameters
   bool suite = false;             ///< --suite: the rows of issue #12
   double handTime = 1.0;          ///< --hand-time: simulated seconds of each hand-tank run of the suite
+  double speedLog = 0;            ///< --speed-log: simulated seconds between speed lines, 0 = none
   bool memory = false;            ///< --memory: bytes per fluid particle by component, the suite's scenes
 };
 
@@ -144,6 +146,11 @@ struct CommandLine {
     line.addPositive(
         "--hand-time", [this](double s) { o.handTime = s; },
         "simulated seconds of each hand-tank run of --suite (default 1.0; the recorded hand lasts 1.25 s)");
+    line.addPositive(
+        "--speed-log", [this](double s) { o.speedLog = s; },
+        "every S simulated seconds, print the window's step count, smallest step, largest speed (with where "
+        "the fastest particle was: distance to each wall of the boundary's bounding box), the 99.9th "
+        "percentile speed and the particles above sqrt(2 g H), H the fluid's initial height (issue #12)");
     app.add_flag("--memory", o.memory,
                  "bytes per fluid particle by component (issue #12) for the suite's scenes: hand tank at "
                  "r = 5 mm and as shipped (--hand-time, 2 threads), reference dam break (--sim-time, default "
@@ -251,9 +258,118 @@ std::string format(double value, int precision) {
   return text;
 }
 
+/// --speed-log: what sets the CFL step of a window of simulated time (issue #12). The step is 0.4 * 2r over
+/// the fastest particle's speed, so the fastest particle and where it is say what the step count answers to;
+/// a free fall from the fluid's initial height H, sqrt(2 g H), bounds what the collapse can give physically.
+class SpeedLog {
+ public:
+  SpeedLog(const fp::sim::Simulation& sim, const fp::sim::SceneDesc& scene, double interval)
+      : m_interval(interval) {
+    const fp::sim::BoundarySet& b = sim.boundary();
+    m_lo = fp::sim::Vec3::Constant(std::numeric_limits<fp::sim::Real>::max());
+    m_hi = -m_lo;
+    for (std::size_t k = 0; k < b.staticCount(); ++k) {
+      m_lo = m_lo.cwiseMin(b.x[k]);
+      m_hi = m_hi.cwiseMax(b.x[k]);
+    }
+    double top = -1e30;
+    double bottom = 1e30;
+    for (const fp::sim::FluidBlock& f : scene.fluid) {
+      top = std::max(top, f.box.max().y());
+      bottom = std::min(bottom, f.box.min().y());
+    }
+    const double g = std::sqrt(scene.params.gravity[0] * scene.params.gravity[0] +
+                               scene.params.gravity[1] * scene.params.gravity[1] +
+                               scene.params.gravity[2] * scene.params.gravity[2]);
+    m_bound = std::sqrt(2.0 * g * std::max(top - bottom, 0.0));
+    std::fprintf(
+        stderr,
+        "speed log: bound sqrt(2 g H) = %.3f m/s; walls (boundary box) x [%.3f, %.3f] y [%.3f, %.3f] "
+        "z [%.3f, %.3f]\n"
+        "  %7s %5s %8s %8s %7s %7s %7s %6s  %s\n",
+        m_bound, m_lo.x(), m_hi.x(), m_lo.y(), m_hi.y(), m_lo.z(), m_hi.z(), "t", "steps", "dt_min",
+        "dt_mean", "v_max", "v_p999", "v_p99", ">bound", "fastest: position, distance to nearest walls");
+  }
+
+  /// after each step
+  void step(const fp::sim::Simulation& sim) {
+    const fp::sim::ParticleSet& p = sim.particles();
+    const double dt = sim.lastStep().dt;
+    ++m_steps;
+    m_dtSum += dt;
+    m_dtMin = std::min(m_dtMin, dt);
+    std::size_t fastest = 0;
+    double vmax = -1;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      const double s = p.v[i].norm();
+      if (s > vmax) {
+        vmax = s;
+        fastest = i;
+      }
+    }
+    if (vmax > m_vmax) {
+      m_vmax = vmax;
+      m_where = p.x[fastest];
+      m_dir = p.v[fastest] / fp::sim::Real(std::max(vmax, 1e-12));
+    }
+    if (sim.time() + 1e-12 < m_next)
+      return;
+    m_next += m_interval;
+    std::vector<float> speed(p.size());
+    std::size_t above = 0;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      speed[i] = p.v[i].norm();
+      above += speed[i] > m_bound;
+    }
+    auto quantile = [&](double q) {
+      if (speed.empty())
+        return 0.0;
+      const auto k = std::size_t(q * double(speed.size() - 1));
+      std::nth_element(speed.begin(), speed.begin() + std::ptrdiff_t(k), speed.end());
+      return double(speed[k]);
+    };
+    const double p999 = quantile(0.999);
+    const double p99 = quantile(0.99);
+    // the walls the fastest particle of the window was nearest to, and the distances
+    const double d[6] = {m_where.x() - m_lo.x(), m_hi.x() - m_where.x(), m_where.y() - m_lo.y(),
+                         m_hi.y() - m_where.y(), m_where.z() - m_lo.z(), m_hi.z() - m_where.z()};
+    const char* names[6] = {"x-", "x+", "floor", "y+", "z-", "z+"};
+    std::string walls;
+    for (int w = 0; w < 6; ++w) {
+      if (d[w] < 0.1) {
+        char t[32];
+        std::snprintf(t, sizeof(t), " %s %.3f", names[w], d[w]);
+        walls += t;
+      }
+    }
+    std::fprintf(
+        stderr, "  %7.3f %5llu %8.5f %8.5f %7.3f %7.3f %7.3f %6zu  (%.3f %.3f %.3f) dir (%.2f %.2f %.2f)%s\n",
+        sim.time(), (unsigned long long)m_steps, m_dtMin, m_dtSum / double(m_steps), m_vmax, p999, p99, above,
+        m_where.x(), m_where.y(), m_where.z(), m_dir.x(), m_dir.y(), m_dir.z(),
+        walls.empty() ? " (no wall within 0.1 m)" : walls.c_str());
+    m_steps = 0;
+    m_dtSum = 0;
+    m_dtMin = 1e30;
+    m_vmax = -1;
+  }
+
+ private:
+  double m_interval;
+  double m_next = 0;
+  double m_bound = 0;
+  fp::sim::Vec3 m_lo, m_hi;
+  std::uint64_t m_steps = 0;
+  double m_dtSum = 0;
+  double m_dtMin = 1e30;
+  double m_vmax = -1;
+  fp::sim::Vec3 m_where = fp::sim::Vec3::Zero();
+  fp::sim::Vec3 m_dir = fp::sim::Vec3::Zero();
+};
+
 /// Runs the scene for `simTime` seconds on `threads` threads. Only the stepping loop is timed: loading the
 /// scene and sampling the boundaries are set-up, which the reference's per-step figures leave out as well.
-Row runOnce(const std::string& scenePath, double simTime, int threads, const std::vector<std::string>& sets) {
+Row runOnce(const std::string& scenePath, double simTime, int threads, const std::vector<std::string>& sets,
+            double speedLog = 0) {
   const fp::engine::ThreadLimit limit(threads);
   fp::sim::SceneDesc scene = fp::engine::loadScene(scenePath);
   fp::engine::applySettings(scene.params, sets);
@@ -261,11 +377,16 @@ Row runOnce(const std::string& scenePath, double simTime, int threads, const std
   std::cerr << "run: " << threads << " thread(s), " << simulation.particles().size() << " fluid particles, "
             << simulation.boundary().size() << " boundary particles, " << simTime << " s to simulate\n";
 
+  std::optional<SpeedLog> log;
+  if (speedLog > 0)
+    log.emplace(simulation, scene, speedLog);
   const auto start = Clock::now();
   auto lastReport = start;
   // The small tolerance stops a CFL step that lands a hair short of simTime from adding a whole extra step.
   while (simulation.time() < simTime - 1e-12) {
     simulation.step();
+    if (log)
+      log->step(simulation);
     const auto now = Clock::now();
     if (std::chrono::duration<double>(now - lastReport).count() >= kProgressInterval) {
       lastReport = now;
@@ -768,7 +889,7 @@ int main(int argc, char** argv) {
               << " s simulated per run\n"
               << "machine: " << machineDescription() << "\n";
     for (int threads : options.threads)
-      rows.push_back(runOnce(scenePath, simTime, threads, options.sets));
+      rows.push_back(runOnce(scenePath, simTime, threads, options.sets, options.speedLog));
   } catch (const std::invalid_argument& e) {  // a --set that breaks a relation with the scene's values
     std::cerr << fp::engine::usageErrorLine("fp_bench", e.what()) << "\n";
     return kExitUsage;

@@ -114,7 +114,9 @@ TEST(SceneLoaderTest, DamBreakHasReferenceValues) {
 
   const sim::SimParams& p = scene.params;
   EXPECT_DOUBLE_EQ(p.particleRadius, 0.025);
-  EXPECT_DOUBLE_EQ(p.viscosity, 0.01);
+  // the reference scene's viscosity: SPlisHSPlasH's Viscosity_Standard with 0.01 m^2/s, no XSPH (issue #12)
+  EXPECT_DOUBLE_EQ(p.viscosity, 0.0);
+  EXPECT_DOUBLE_EQ(p.laminarViscosity, 0.01);
   EXPECT_DOUBLE_EQ(p.cflFactor, 0.4);
   EXPECT_DOUBLE_EQ(p.dtMax, 0.005);
   EXPECT_DOUBLE_EQ(p.densityTolerance, 0.05);
@@ -130,6 +132,7 @@ TEST(SceneLoaderTest, DamBreakHiresDiffersOnlyInRadius) {
   const sim::SceneDesc hi = loadScene(scenePath("dam_break_hires.json"));
   EXPECT_DOUBLE_EQ(hi.params.particleRadius, 0.0105);
   EXPECT_DOUBLE_EQ(hi.params.viscosity, lo.params.viscosity);
+  EXPECT_DOUBLE_EQ(hi.params.laminarViscosity, lo.params.laminarViscosity);
   EXPECT_DOUBLE_EQ(hi.params.cflFactor, lo.params.cflFactor);
   EXPECT_DOUBLE_EQ(hi.params.dtMax, lo.params.dtMax);
   EXPECT_DOUBLE_EQ(hi.params.densityTolerance, lo.params.densityTolerance);
