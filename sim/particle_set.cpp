@@ -108,23 +108,41 @@ void ParticleSet::reserve(std::size_t n) {
 
 void ParticleSet::permute(const std::vector<std::uint32_t>& order) {
   const std::size_t n = order.size();
-  // every field goes through the one float buffer, copied as raw bytes (no type punning): gather, copy back
-  static_assert(sizeof(Vec3) == 3 * sizeof(Real));
-  m_scratch.resize(3 * n);
-  auto* buffer = reinterpret_cast<unsigned char*>(m_scratch.data());
+  // One buffer of one float a particle serves every field: a 4-byte field is gathered into it and copied
+  // back, a vector field one coordinate at a time (the gathers of a coordinate read that coordinate only,
+  // which the copies back of the others leave as it was). Copies go through memcpy: the ids and flags pass
+  // through the float buffer as raw bytes.
+  m_scratch.resize(n);
+  Real* buffer = m_scratch.data();
   using Range = tbb::blocked_range<std::size_t>;
+  auto copyBack = [&](auto* dst) {
+    parallelFor(Range(0, n, 4096), [&](const Range& r) {
+      std::memcpy(static_cast<void*>(dst + r.begin()), buffer + r.begin(),
+                  (r.end() - r.begin()) * sizeof(Real));
+    });
+  };
   forEachField([&](auto& field) {
     using T = typename std::decay_t<decltype(field)>::value_type;
-    static_assert(sizeof(T) <= sizeof(Vec3) && (std::is_trivially_copyable_v<T> || std::is_same_v<T, Vec3>));
-    parallelFor(Range(0, n, 4096), [&](const Range& r) {
-      for (std::size_t k = r.begin(); k < r.end(); ++k)
-        std::memcpy(buffer + k * sizeof(T), &field[order[k]], sizeof(T));
-    });
+    if constexpr (std::is_same_v<T, Vec3>) {
+      for (int c = 0; c < 3; ++c) {
+        parallelFor(Range(0, n, 4096), [&](const Range& r) {
+          for (std::size_t k = r.begin(); k < r.end(); ++k)
+            buffer[k] = field[order[k]][c];
+        });
+        parallelFor(Range(0, n, 4096), [&](const Range& r) {
+          for (std::size_t k = r.begin(); k < r.end(); ++k)
+            field[k][c] = buffer[k];
+        });
+      }
+    } else {
+      static_assert(sizeof(T) == sizeof(Real) && std::is_trivially_copyable_v<T>);
+      parallelFor(Range(0, n, 4096), [&](const Range& r) {
+        for (std::size_t k = r.begin(); k < r.end(); ++k)
+          std::memcpy(buffer + k, &field[order[k]], sizeof(Real));
+      });
+      copyBack(field.data());
+    }
     field.resize(n);  // `order` may keep a subset (Adaptivity drops merged particles so)
-    parallelFor(Range(0, n, 4096), [&](const Range& r) {
-      std::memcpy(static_cast<void*>(field.data() + r.begin()), buffer + r.begin() * sizeof(T),
-                  (r.end() - r.begin()) * sizeof(T));
-    });
   });
 }
 
@@ -159,8 +177,7 @@ void ParticleSet::memoryBreakdown(std::vector<MemoryItem>& out) const {
     countVector(solver, *f);
   for (const auto* f : {&id, &flags})
     countVector(solver, *f);
-  MemoryItem adaptive{
-      "fluid: adaptivity fields (splitTime levels mOpt phi omega nu heavySteps parentId splitAge)", 0, 0};
+  MemoryItem adaptive{"fluid: adaptivity fields (levels mOpt phi omega nu split* heavySteps)", 0, 0};
   for (const auto* f : {&splitTime, &levelPhi, &levelOmega, &levelNu, &mOpt, &phi, &omega, &nu})
     countVector(adaptive, *f);
   for (const auto* f : {&heavySteps, &parentId, &splitAge})

@@ -87,7 +87,8 @@ class ParticleSet {
   void reserve(std::size_t n);
   /// releases capacity beyond the particle count in every field
   void shrinkToFit();
-  /// reorders all fields so that new index k holds old particle order[k]; `order` is a permutation
+  /// reorders all fields so that new index k holds old particle order[k]; `order` is a permutation, or the
+  /// indices of the particles to keep (the others are dropped)
   void permute(const std::vector<std::uint32_t>& order);
   /// the next unused stable id
   std::uint32_t nextId() const { return m_nextId; }
@@ -110,8 +111,7 @@ class ParticleSet {
   void forEachAdaptivityField(F&& f);
   std::uint32_t m_nextId = 0;
   bool m_adaptivityFields = true;
-  // permute()'s scratch: one buffer for every field, as large as the largest element (12 B a particle, not
-  // one vector per element type)
+  // permute()'s scratch: one float a particle for every field (vector fields go a coordinate at a time)
   std::vector<Real> m_scratch;
 };
 

@@ -64,6 +64,13 @@ void dropNeighbors(NeighborList& list, const std::vector<std::uint8_t>& held) {
   list.indices.resize(write);
 }
 
+/// Releases an object's spare capacity: a copy's vectors hold what they contain, no more.
+template <class T>
+void fitCapacity(T& object) {
+  T fitted = object;
+  object = std::move(fitted);
+}
+
 std::string formatVec(const Vec3& v) {
   std::ostringstream s;
   s << "(" << v.x() << ", " << v.y() << ", " << v.z() << ")";
@@ -155,11 +162,11 @@ Simulation::Simulation(const SceneDesc& scene) : m_scene(scene), m_params(scene.
   }
   m_staticBounds = pointBounds(m_boundary.x.data(), m_boundary.staticCount());
 
+  // the uniform modes never split, merge nor estimate levels: their particles hold no adaptivity fields
+  m_fluid.setAdaptivityFields(adaptive());
   // The adaptive modes start from the coarsened lattice (createFluid); the band between fine and coarse is
   // filled in by the first adaptation steps, gradually, as during the run. (Settling it before time starts,
   // with supports set at once, left density errors of several percent.)
-  // the uniform modes never split, merge nor estimate levels: their particles hold no adaptivity fields
-  m_fluid.setAdaptivityFields(adaptive());
   createFluid();
   m_dt = Real(m_params.dtMax);
   // The split templates are built once per process on first use (0.1-0.3 s): here, not in the first step
@@ -168,14 +175,20 @@ Simulation::Simulation(const SceneDesc& scene) : m_scene(scene), m_params(scene.
     SplitTemplates::get();
   if (m_mode != AdaptivityMode::UniformHigh)
     relax(m_params.initialRelaxation);
-  // The modes with coarse particles searched the whole fine lattice once (coarsenInitialLattice): its
-  // capacity would stay as spare memory for the whole run.
+  // The modes with coarse particles searched the whole fine lattice once (coarsenInitialLattice), up to
+  // seven times as many particles as they keep: every buffer sized for it would stay as spare memory for the
+  // whole run (the hand tank's sort keys, levels, search and adaptivity scratch held 200 B a particle of it).
   m_fluid.shrinkToFit();
-  for (NeighborList* list : {&m_fluidNbrs, &m_boundaryNbrs}) {
-    list->indices.shrink_to_fit();
-    list->offsets.shrink_to_fit();
-  }
   m_solver.shrinkToFit();
+  fitCapacity(m_fluidNbrs);
+  fitCapacity(m_boundaryNbrs);
+  fitCapacity(m_grid);
+  fitCapacity(m_search);
+  fitCapacity(m_levels);
+  fitCapacity(m_adaptivity);
+  for (std::vector<std::uint32_t>* v : {&m_order, &m_fluidCells, &m_kinematicCells})
+    v->shrink_to_fit();
+  m_target.shrink_to_fit();
 }
 
 void Simulation::relax(int steps) {
