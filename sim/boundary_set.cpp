@@ -120,12 +120,7 @@ void BoundarySet::permute(std::size_t begin, const std::vector<std::uint32_t>& o
 }
 
 std::size_t BoundarySet::memoryBytes() const {
-  std::vector<MemoryItem> items;
-  memoryBreakdown(items);
-  std::size_t bytes = 0;
-  for (const MemoryItem& item : items)
-    bytes += item.bytes;
-  return bytes;
+  return heldBytes(*this);
 }
 
 void BoundarySet::memoryBreakdown(std::vector<MemoryItem>& out) const {

@@ -161,12 +161,7 @@ Vec3d ParticleSet::totalMomentum() const {
 }
 
 std::size_t ParticleSet::memoryBytes() const {
-  std::vector<MemoryItem> items;
-  memoryBreakdown(items);
-  std::size_t bytes = 0;
-  for (const MemoryItem& item : items)
-    bytes += item.bytes;
-  return bytes;
+  return heldBytes(*this);
 }
 
 void ParticleSet::memoryBreakdown(std::vector<MemoryItem>& out) const {

@@ -34,6 +34,17 @@ void countVector(MemoryItem& item, const V& v) {
   item.used += v.size() * sizeof(typename V::value_type);
 }
 
+/// The bytes held by an object whose memoryBreakdown(out) appends its lines (ParticleSet, BoundarySet).
+template <class T>
+std::size_t heldBytes(const T& object) {
+  std::vector<MemoryItem> items;
+  object.memoryBreakdown(items);
+  std::size_t bytes = 0;
+  for (const MemoryItem& item : items)
+    bytes += item.bytes;
+  return bytes;
+}
+
 /// Structure of arrays of the fluid particles. The fields from splitTime on, after flags, serve the
 /// adaptivity only: the uniform modes drop them (setAdaptivityFields(false)), which saves 44 B a particle;
 /// they are then empty, and the ...Of(i) readers give their neutral values.

@@ -808,6 +808,24 @@ bool isHiresScene(const std::string& path) {
   return std::filesystem::path(path).filename() == "dam_break_hires.json";
 }
 
+/// Runs `body`; a bad option, scene or run ends fp_bench with its one-line message and exit code.
+template <class F>
+int runGuarded(F&& body) {
+  try {
+    body();
+  } catch (const std::invalid_argument& e) {  // a --set that breaks a relation with the scene's values
+    std::cerr << fp::engine::usageErrorLine("fp_bench", e.what()) << "\n";
+    return kExitUsage;
+  } catch (const fp::sim::InputError& e) {
+    std::cerr << "fp_bench: " << e.what() << "\n";
+    return kExitInput;
+  } catch (const fp::sim::InstabilityError& e) {
+    std::cerr << "fp_bench: unstable: " << e.what() << "\n";
+    return kExitUnstable;
+  }
+  return kExitOk;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -817,54 +835,41 @@ int main(int argc, char** argv) {
   const Options& options = command.o;
   if (options.memory) {
     std::vector<MemoryColumn> columns;
-    try {
-      std::cout << "fp_bench --memory: issue #12's scenes\n";
-      columns.push_back(memoryOfHandTank("hand_tank_r5mm", kFingerRadius, options.handTime));
-      columns.push_back(memoryOfHandTank("hand_tank_shipped", 0.0, options.handTime));
-      columns.push_back(memoryOfDamBreak(options.simTime.value_or(0.1)));
-    } catch (const std::invalid_argument& e) {
-      std::cerr << fp::engine::usageErrorLine("fp_bench", e.what()) << "\n";
-      return kExitUsage;
-    } catch (const fp::sim::InputError& e) {
-      std::cerr << "fp_bench: " << e.what() << "\n";
-      return kExitInput;
-    } catch (const fp::sim::InstabilityError& e) {
-      std::cerr << "fp_bench: unstable: " << e.what() << "\n";
-      return kExitUnstable;
-    }
+    if (const int code = runGuarded([&] {
+          std::cout << "fp_bench --memory: issue #12's scenes\n";
+          columns.push_back(memoryOfHandTank("hand_tank_r5mm", kFingerRadius, options.handTime));
+          columns.push_back(memoryOfHandTank("hand_tank_shipped", 0.0, options.handTime));
+          columns.push_back(memoryOfDamBreak(options.simTime.value_or(0.1)));
+        });
+        code != kExitOk)
+      return code;
     printMemory(std::cout, columns);
     return kExitOk;
   }
   if (options.suite) {
     const double damTime = options.simTime.value_or(kDefaultSimTime);
     std::vector<SuiteRow> rows;
-    try {
-      std::cout << "fp_bench --suite: issue #12's rows in one run\nmachine: " << machineDescription() << "\n";
-      rows.push_back(runHandTank("hand_tank_r5mm", kFingerRadius, 2, options.handTime));
-      rows.push_back(runHandTank("hand_tank_r5mm", kFingerRadius, 1, options.handTime));
-      rows.push_back(runHandTank("hand_tank_shipped", 0.0, 2, options.handTime));
-      const Row dam = runOnce(kDefaultScene, damTime, kRefThreads, {});
-      SuiteRow r;
-      r.name = "dam_break_hires";
-      r.threads = dam.threads;
-      r.particles = double(dam.particles);
-      r.steps = dam.steps;
-      r.simSeconds = dam.simSeconds;
-      r.wallSeconds = dam.wallSeconds;
-      r.usPerParticleStep = dam.usPerParticleStep;
-      r.bytesPerParticle = dam.bytesPerParticle;
-      r.msPerStep = dam.msPerStepByPhase;
-      rows.push_back(r);
-    } catch (const std::invalid_argument& e) {
-      std::cerr << fp::engine::usageErrorLine("fp_bench", e.what()) << "\n";
-      return kExitUsage;
-    } catch (const fp::sim::InputError& e) {
-      std::cerr << "fp_bench: " << e.what() << "\n";
-      return kExitInput;
-    } catch (const fp::sim::InstabilityError& e) {
-      std::cerr << "fp_bench: unstable: " << e.what() << "\n";
-      return kExitUnstable;
-    }
+    if (const int code = runGuarded([&] {
+          std::cout << "fp_bench --suite: issue #12's rows in one run\nmachine: " << machineDescription()
+                    << "\n";
+          rows.push_back(runHandTank("hand_tank_r5mm", kFingerRadius, 2, options.handTime));
+          rows.push_back(runHandTank("hand_tank_r5mm", kFingerRadius, 1, options.handTime));
+          rows.push_back(runHandTank("hand_tank_shipped", 0.0, 2, options.handTime));
+          const Row dam = runOnce(kDefaultScene, damTime, kRefThreads, {});
+          SuiteRow r;
+          r.name = "dam_break_hires";
+          r.threads = dam.threads;
+          r.particles = double(dam.particles);
+          r.steps = dam.steps;
+          r.simSeconds = dam.simSeconds;
+          r.wallSeconds = dam.wallSeconds;
+          r.usPerParticleStep = dam.usPerParticleStep;
+          r.bytesPerParticle = dam.bytesPerParticle;
+          r.msPerStep = dam.msPerStepByPhase;
+          rows.push_back(r);
+        });
+        code != kExitOk)
+      return code;
     std::cout << "\n";
     printSuite(std::cout, rows, damTime);
     if (!options.csvPath.empty()) {
@@ -881,25 +886,18 @@ int main(int argc, char** argv) {
   const double simTime = options.simTime.value_or(options.quick ? kQuickSimTime : kDefaultSimTime);
 
   std::vector<Row> rows;
-  try {
-    // Load once up front so a bad scene fails before anything is printed; each run loads its own copy.
-    fp::sim::SceneDesc scene = fp::engine::loadScene(scenePath);
-    fp::engine::applySettings(scene.params, options.sets);
-    std::cout << "fp_bench: " << scene.name << " (" << scenePath << "), " << simTime
-              << " s simulated per run\n"
-              << "machine: " << machineDescription() << "\n";
-    for (int threads : options.threads)
-      rows.push_back(runOnce(scenePath, simTime, threads, options.sets, options.speedLog));
-  } catch (const std::invalid_argument& e) {  // a --set that breaks a relation with the scene's values
-    std::cerr << fp::engine::usageErrorLine("fp_bench", e.what()) << "\n";
-    return kExitUsage;
-  } catch (const fp::sim::InputError& e) {
-    std::cerr << "fp_bench: " << e.what() << "\n";
-    return kExitInput;
-  } catch (const fp::sim::InstabilityError& e) {
-    std::cerr << "fp_bench: unstable: " << e.what() << "\n";
-    return kExitUnstable;
-  }
+  if (const int code = runGuarded([&] {
+        // Load once up front so a bad scene fails before anything is printed; each run loads its own copy.
+        fp::sim::SceneDesc scene = fp::engine::loadScene(scenePath);
+        fp::engine::applySettings(scene.params, options.sets);
+        std::cout << "fp_bench: " << scene.name << " (" << scenePath << "), " << simTime
+                  << " s simulated per run\n"
+                  << "machine: " << machineDescription() << "\n";
+        for (int threads : options.threads)
+          rows.push_back(runOnce(scenePath, simTime, threads, options.sets, options.speedLog));
+      });
+      code != kExitOk)
+    return code;
 
   std::cout << "\n";
   printTable(std::cout, rows);

@@ -25,4 +25,18 @@ inline sim::SceneDesc tankScene(const sim::Vec3d& half, const sim::Vec3d& waterL
   return s;
 }
 
+/// `s` with a sphere named "paddle" moving through it at a constant velocity: kinematic boundary particles
+/// beside the static ones
+inline sim::SceneDesc withPaddle(sim::SceneDesc s, double radius, const sim::Vec3d& position,
+                                 const sim::Vec3d& velocity) {
+  sim::ColliderDesc paddle;
+  paddle.name = "paddle";
+  paddle.shape = sim::ShapeType::Sphere;
+  paddle.radius = radius;
+  paddle.position = position;
+  paddle.linearVelocity = velocity;
+  s.colliders.push_back(paddle);
+  return s;
+}
+
 }  // namespace fp::test

@@ -21,15 +21,8 @@ sim::SceneDesc smallDamBreak(sim::AdaptivityMode mode) {
 }
 
 /// a paddle moving through the tank: kinematic boundary particles beside the static ones
-sim::SceneDesc withPaddle(sim::SceneDesc s) {
-  sim::ColliderDesc paddle;
-  paddle.name = "paddle";
-  paddle.shape = sim::ShapeType::Sphere;
-  paddle.radius = 0.1;
-  paddle.position = sim::Vec3d(-0.2, 0.3, 0.0);
-  paddle.linearVelocity = sim::Vec3d(0.5, 0.0, 0.0);
-  s.colliders.push_back(paddle);
-  return s;
+sim::SceneDesc withPaddle(const sim::SceneDesc& s) {
+  return test::withPaddle(s, 0.1, sim::Vec3d(-0.2, 0.3, 0.0), sim::Vec3d(0.5, 0.0, 0.0));
 }
 
 std::size_t adaptivityCapacity(const sim::ParticleSet& p) {

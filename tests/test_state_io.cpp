@@ -26,14 +26,7 @@ sim::SceneDesc movingScene(sim::AdaptivityMode mode) {
                                      sim::Vec3d(0.2, 0.12, 0.08), 0.01);
   s.mode = mode;
   s.params.massRatio = 8.0;
-  sim::ColliderDesc paddle;
-  paddle.name = "paddle";
-  paddle.shape = sim::ShapeType::Sphere;
-  paddle.radius = 0.03;
-  paddle.position = sim::Vec3d(-0.1, 0.09, 0.0);
-  paddle.linearVelocity = sim::Vec3d(0.8, 0.0, 0.0);
-  s.colliders.push_back(paddle);
-  return s;
+  return test::withPaddle(s, 0.03, sim::Vec3d(-0.1, 0.09, 0.0), sim::Vec3d(0.8, 0.0, 0.0));
 }
 
 template <class T>
