@@ -15,6 +15,7 @@
 #include "render/camera.h"
 #include "render/render_settings.h"
 #include "sim/scene.h"
+#include "tests/temp_path.h"
 
 using namespace fp::engine;
 
@@ -38,8 +39,7 @@ struct ExeRun {
 // runs the executable with `args`, keeping stdout and the lines of stderr
 ExeRun runExeOutput(const std::string& args) {
   // one file pair per test: ctest runs the tests of this suite in parallel processes
-  const std::string base =
-      ::testing::TempDir() + "/fp_cli_run_" + ::testing::UnitTest::GetInstance()->current_test_info()->name();
+  const std::string base = fp::test::tempPath("run");
   const std::string cmd =
       std::string(FP_FLUIDPLAYING_EXE) + " " + args + " > " + base + ".out 2> " + base + ".err";
   const int status = std::system(cmd.c_str());
@@ -147,7 +147,7 @@ TEST(CliTest, ExitCodesOfTheExecutable) {
   EXPECT_EQ(runExe("--help"), kExitOk);
   EXPECT_EQ(runExe("--no-such-flag"), kExitUsage);
   EXPECT_EQ(runExe("--headless --scene /nonexistent/scene.json"), kExitInput);
-  const std::string bad = ::testing::TempDir() + "/fp_bad_scene.json";
+  const std::string bad = fp::test::tempPath("bad_scene.json");
   std::ofstream(bad) << "{\"domain\": 3}";
   EXPECT_EQ(runExe("--headless --quiet --scene " + bad), kExitInput);
 }
@@ -187,7 +187,7 @@ TEST(CliTest, TheBenchmarksShareTheCommandLine) {
   std::istringstream exes(FP_BENCH_EXES);
   for (std::string exe; exes >> exe;) {
     const std::string name = std::filesystem::path(exe).filename().string();
-    const std::string err = ::testing::TempDir() + "/fp_bench_cli_" + name + ".err";
+    const std::string err = fp::test::tempPath(name + ".err");
     EXPECT_EQ(std::system((exe + " --help > /dev/null 2> " + err).c_str()), 0) << name;
     for (const char* args : {"--no-such-flag", "--set no_such_key=1"}) {
       const int status = std::system((exe + " " + args + " > /dev/null 2> " + err).c_str());
@@ -298,7 +298,7 @@ TEST(CliTest, ParsesAppOptions) {
 }
 
 TEST(CliTest, WindowWithoutDisplayFallsBackToHeadlessInOneLine) {
-  const std::string err = ::testing::TempDir() + "/fp_no_display.txt";
+  const std::string err = fp::test::tempPath("no_display.txt");
   const std::string cmd = std::string("env -u DISPLAY -u WAYLAND_DISPLAY ") + FP_FLUIDPLAYING_EXE +
                           " --quiet --frames 2 --scene " + scene("tiny_dam_break.json") + " > /dev/null 2> " +
                           err;
@@ -318,7 +318,7 @@ TEST(CliTest, HeadlessHandReplayRunsAndRejectsABadScript) {
   EXPECT_EQ(runExe("--headless --quiet --frames 2 --scene " + scene("hand_tank.json") +
                    " --mode uniform-low " + "--hand-script " + hands + "push.csv"),
             kExitOk);
-  const std::string bad = ::testing::TempDir() + "/fp_bad_hand.csv";
+  const std::string bad = fp::test::tempPath("bad_hand.csv");
   std::ofstream(bad) << "time,x\n0,1\n";
   EXPECT_EQ(runExe("--headless --quiet --frames 2 --scene " + scene("tiny_dam_break.json") +
                    " --hand-script " + bad),
@@ -326,7 +326,7 @@ TEST(CliTest, HeadlessHandReplayRunsAndRejectsABadScript) {
 }
 
 TEST(HeadlessRunnerTest, WritesSummaryStatsAndFramesSmall) {
-  const std::string dir = ::testing::TempDir() + "/fp_headless_run";
+  const std::string dir = fp::test::tempPath("frames");
   std::filesystem::remove_all(dir);
   CliOptions o;
   o.headless = true;

@@ -15,15 +15,12 @@
 #include "sim/boundary_sampling.h"
 #include "sim/mesh.h"
 #include "sim/signed_distance.h"
+#include "tests/temp_path.h"
 
 namespace fp::sim {
 namespace {
 
-/// A file in the test temp directory, named after the running test so that parallel tests do not collide.
-std::string tempPath(const std::string& name) {
-  const ::testing::TestInfo* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  return ::testing::TempDir() + "fp_" + info->test_suite_name() + "_" + info->name() + "_" + name;
-}
+using test::tempPath;
 
 std::string writeFile(const std::string& name, const std::string& text) {
   const std::string path = tempPath(name);

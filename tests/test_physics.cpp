@@ -14,6 +14,7 @@
 #include "sim/signed_distance.h"
 #include "sim/simulation.h"
 #include "tests/scene_fixtures.h"
+#include "tests/temp_path.h"
 
 using namespace fp::sim;
 using fp::test::tankScene;
@@ -335,7 +336,7 @@ TEST(PhysicsTest, PlyRoundTripSmall) {
   Simulation sim(smallDamBreak());
   for (int k = 0; k < 5; ++k)
     sim.step();
-  const std::string path = ::testing::TempDir() + "/fp_particles.ply";
+  const std::string path = fp::test::tempPath("particles.ply");
   writePly(path, sim.particles());
   const ParticleSet back = readPly(path);
   ASSERT_EQ(back.size(), sim.particles().size());

@@ -1,4 +1,5 @@
 #include "input/pose_track.h"
+#include "tests/temp_path.h"
 
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -58,11 +59,9 @@ class PoseTrackTest : public ::testing::Test {
     }
   }
 
-  /// A path private to this test and process, so parallel ctest runs never share files.
+  /// A path private to this test and process, removed after the test.
   std::string tempPath(const std::string& name) {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    std::string path =
-        ::testing::TempDir() + "pose_track_" + info->name() + "_" + std::to_string(::getpid()) + "_" + name;
+    std::string path = test::tempPath(name);
     m_files.push_back(path);
     return path;
   }

@@ -18,6 +18,7 @@
 #include "engine/scene_loader.h"
 #include "sim/boundary_sampling.h"
 #include "sim/signed_distance.h"
+#include "tests/temp_path.h"
 
 namespace fp::engine {
 namespace {
@@ -479,7 +480,7 @@ TEST(SceneLoaderTest, MissingSceneFile) {
 // Presets are read by the scenes' strict reader: the same duplicate-key, suggestion and path messages.
 class PresetFileTest : public ::testing::Test {
  protected:
-  std::string m_path = (fs::path(::testing::TempDir()) / "fp_strict_preset.json").string();
+  std::string m_path = test::tempPath("preset.json");
   void TearDown() override { fs::remove(m_path); }
   std::string errorOfPreset(const std::string& text) {
     std::ofstream(m_path) << text;

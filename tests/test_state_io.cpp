@@ -15,6 +15,7 @@
 #include "sim/state_io.h"
 #include "tests/fuzz/fuzz_state_scene.h"
 #include "tests/scene_fixtures.h"
+#include "tests/temp_path.h"
 
 namespace {
 
@@ -66,9 +67,7 @@ TEST_P(StateIo, ResumedRunIsBitIdenticalOnOneThread) {
   for (int k = 0; k < 30; ++k)
     uninterrupted.step();
   uninterrupted.params().viscosity = 0.05;  // a live edit before the save is part of the state
-  const std::string path =
-      (std::filesystem::temp_directory_path() / ("fp_state_" + std::to_string(int(GetParam())) + ".bin"))
-          .string();
+  const std::string path = fp::test::tempPath("state.bin");
   sim::saveState(path, uninterrupted, {1.5, -2.0});
   for (int k = 0; k < 40; ++k)
     uninterrupted.step();
@@ -231,7 +230,7 @@ TEST(StateIoErrors, MissingAndUnwritableFiles) {
   sim::Simulation target(s.scene);
   EXPECT_THROW(sim::loadState("/nonexistent/fp_state.bin", target), sim::StateError);
   EXPECT_THROW(sim::saveState("/nonexistent/fp_state.bin", s.source), sim::InputError);
-  const std::string empty = (std::filesystem::temp_directory_path() / "fp_state_empty.bin").string();
+  const std::string empty = fp::test::tempPath("empty.bin");
   { std::ofstream(empty, std::ios::binary); }
   EXPECT_THROW(sim::loadState(empty, target), sim::StateError);
   std::filesystem::remove(empty);
