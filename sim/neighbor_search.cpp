@@ -24,7 +24,7 @@ constexpr std::size_t kChunk = 128;
 
 /// |a - b|^2, the distance every pair test of the search uses, spelled out so that the scalar and the AVX2
 /// candidate tests round alike: the order of Eigen's (a - b).squaredNorm() (x^2 + (y^2 + z^2)), with the two
-/// fused multiply-adds GCC contracts it to where the build targets FMA (-march=native), so the lists are
+/// fused multiply-adds GCC contracts it to where the build targets FMA (-DFP_NATIVE=ON), so the lists are
 /// bit for bit those of the search before the AVX2 path.
 inline Real distance2(const Vec3& a, const Vec3& b) {
   const Real dx = a.x() - b.x();
@@ -172,7 +172,7 @@ FP_AVX2_TARGET std::size_t testRunsAvx2(const CandidateTest& t, const Vec3* sx, 
 
 bool detectAvx2() {
 #ifdef __AVX2__
-  return true;  // the build targets AVX2 (-march=native on such a CPU)
+  return true;  // the build targets AVX2 (-DFP_NATIVE=ON on such a CPU)
 #else
   __builtin_cpu_init();
   return __builtin_cpu_supports("avx2");

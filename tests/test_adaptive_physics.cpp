@@ -151,27 +151,40 @@ TEST(AdaptivePhysicsTest, PropellerDrawsFineParticlesIntoItsVorticesUnlikeSurfac
   };
   double meanMass[2] = {0.0, 0.0};
   const AdaptivityMode modes[2] = {AdaptivityMode::Surface, AdaptivityMode::FluidPlaying};
+  // One run is one sample of a chaotic flow: its figure moved from 0.88 to 0.97 of surface-only's with the
+  // last bits of the build's rounding (FMA or not). Three runs a mode, perturbed through the seed of the
+  // split orientations, and their mean.
+  const std::uint64_t seeds[] = {1, 2, 3};
   for (int k = 0; k < 2; ++k) {
-    scene.mode = modes[k];
-    Simulation sim(scene);
-    // the mean mass near the propeller, averaged over frames from 0.3 s to 0.8 s (one frame is too noisy: the
-    // region holds about a hundred particles)
-    int frames = 0;
-    double next = 0.3;
-    while (sim.time() < 0.8) {
-      sim.step();
-      if (sim.time() >= next) {
-        const ParticleSet& p = sim.particles();
-        meanMass[k] += meanMassRatio(sim, [&](std::size_t i) { return nearPropeller(p.x[i]); });
-        ++frames;
-        next += 0.05;
+    for (std::uint64_t seed : seeds) {
+      scene.mode = modes[k];
+      scene.params.seed = seed;
+      Simulation sim(scene);
+      // the mean mass near the propeller, averaged over frames from 0.3 s to 0.8 s (one frame is too noisy:
+      // the region holds about a hundred particles)
+      int frames = 0;
+      double next = 0.3;
+      double run = 0.0;
+      while (sim.time() < 0.8) {
+        sim.step();
+        if (sim.time() >= next) {
+          const ParticleSet& p = sim.particles();
+          run += meanMassRatio(sim, [&](std::size_t i) { return nearPropeller(p.x[i]); });
+          ++frames;
+          next += 0.05;
+        }
       }
+      std::printf("%s, seed %d: mean mass near the propeller %.2f m_fine\n", modeName(modes[k]), int(seed),
+                  run / frames);
+      meanMass[k] += run / frames / double(std::size(seeds));
     }
-    meanMass[k] /= frames;
   }
+  std::printf("mean over the seeds: surface %.2f, fluidplaying %.2f (%.3f)\n", meanMass[0], meanMass[1],
+              meanMass[1] / meanMass[0]);
   EXPECT_GT(meanMass[0], 3.0);
-  // measured: 23.5 m_fine in surface mode against 20.7 in fluidplaying (0.88; 0.71 before the refinement was
-  // CFL-limited, which keeps the fastest water by the blades coarser)
+  // measured (portable build): surface 21.1 / 23.6 / 22.7 m_fine, fluidplaying 20.4 / 19.6 / 17.0, means 22.5
+  // and 19.0 (0.85; one run of each gave 0.88 with FMA, 0.71 before the refinement was CFL-limited, which
+  // keeps the fastest water by the blades coarser)
   EXPECT_LT(meanMass[1], 0.92 * meanMass[0]) << "surface " << meanMass[0] << ", fluidplaying " << meanMass[1];
 }
 

@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "sim/simulation.h"
 #include "tests/scene_fixtures.h"
 
@@ -51,6 +53,33 @@ TEST(Memory, UniformModesHoldNoAdaptivityFields) {
   EXPECT_TRUE(p.hasAdaptivityFields());
   EXPECT_EQ(p.mOpt.size(), p.size());
   EXPECT_EQ(p.splitAge.size(), p.size());
+}
+
+TEST(Memory, ParticleArraysGrowBySixteenthsNotByDoubling) {
+  // splits add particles one at a time: past the capacity every field grows by 1/16 (at least 256), together
+  sim::ParticleSet p;
+  p.setAdaptivityFields(true);
+  std::size_t grew = 0;
+  for (int k = 0; k < 20000; ++k) {
+    const std::size_t before = p.x.capacity();
+    if (k == 0)
+      p.add(sim::Vec3(0, 0, 0), sim::Vec3(1, 2, 3), 1, 1, 1000);
+    else  // the previous particle's own position and velocity, as a split passes its parent's
+      p.add(p.x[std::size_t(k) - 1] + sim::Vec3(1, 0, 0), p.v[std::size_t(k) - 1], 1, 1, 1000);
+    if (p.x.capacity() == before)
+      continue;
+    ++grew;
+    EXPECT_LE(p.x.capacity(), std::max<std::size_t>(p.size() - 1 + 256, (p.size() - 1) * 17 / 16)) << k;
+    EXPECT_EQ(p.v.capacity(), p.x.capacity());
+    EXPECT_EQ(p.splitAge.capacity(), p.x.capacity());
+  }
+  // doubling would have grown 7 times (256 ... 32768), 1/16 steps about 50 times, never past 17/16 of the
+  // count
+  EXPECT_GT(grew, 40u);
+  EXPECT_LE(p.x.capacity(), p.size() * 17 / 16 + 1);
+  EXPECT_EQ(p.x[19999].x(), 19999.0f);
+  EXPECT_EQ(p.v[19999], sim::Vec3(1, 2, 3))
+      << "an argument that aliased the arrays was read after they moved";
 }
 
 TEST(Memory, StaticBoundaryParticlesHoldNoVelocityNorLocalPosition) {
