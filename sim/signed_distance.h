@@ -29,7 +29,9 @@ struct MeshSdfData {
   std::vector<std::array<double, 3>> angles;           ///< interior angle at each corner [rad]
   std::vector<std::vector<std::uint32_t>> components;  ///< triangles of each connected component
   std::vector<Aabb> componentBounds;                   ///< bounding box of each component
-  double tolerance = 0.0;  ///< closest points closer than this are one feature [m]
+  std::vector<Vec3d> centroids;                        ///< centroid of each triangle: one of its points
+  std::vector<double> spans;  ///< largest distance from a triangle's centroid to its corners [m]
+  double tolerance = 0.0;     ///< closest points closer than this are one feature [m]
 };
 
 /// Builds the per-mesh data; throws InputError when a triangle references a missing vertex.

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <memory>
 #include <random>
@@ -460,6 +461,69 @@ TEST(PropellerTest, SamplesOnSurfaceAndSigns) {
   EXPECT_NEAR(signedDistanceLocal(c, Vec3d(0, 0, 0.3)), 0.22, 1e-9);  // above the hub cap
   EXPECT_GT(signedDistanceLocal(c, Vec3d(0.3, 0, 0.1)), 0.02);        // above the blade
   EXPECT_GT(signedDistanceLocal(c, Vec3d(0.6, 0, 0)), 0.09);          // beyond the tip
+}
+
+// Ericson, Real-Time Collision Detection 5.1.5: the point of triangle abc closest to p, written here apart
+// from the library's so that the check below does not test the code with itself.
+Vec3d referenceClosest(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+  const Vec3d ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0 && d2 <= 0)
+    return a;
+  const Vec3d bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0 && d4 <= d3)
+    return b;
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0)
+    return a + d1 / (d1 - d3) * ab;
+  const Vec3d cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0 && d5 <= d6)
+    return c;
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0)
+    return a + d2 / (d2 - d6) * ac;
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0)
+    return b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b);
+  const double denom = 1.0 / (va + vb + vc);
+  return a + ab * (vb * denom) + ac * (vc * denom);
+}
+
+TEST(PropellerTest, PrunedDistanceEqualsTheDistanceOverAllTriangles) {
+  // The mesh distance skips the triangles whose bounding sphere is farther than the nearest centroid: the
+  // magnitude of each component's distance must still be the distance to the nearest of all its triangles,
+  // near the blades (where many triangles compete) and away from them.
+  auto mesh = std::make_shared<const TriangleMesh>(TriangleMesh::loadObj(kPropellerPath));
+  const ColliderDesc c = meshCollider(mesh);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-0.7, 0.7);
+  std::uniform_real_distribution<double> nearSurface(-0.02, 0.02);
+  const std::vector<Vec3d> surface = sampleColliderLocal(c, 0.05);
+  std::vector<Vec3d> points;
+  for (int i = 0; i < 400; ++i)
+    points.emplace_back(u(rng), u(rng), 0.3 * u(rng));
+  for (std::size_t i = 0; i < surface.size(); i += 3)
+    points.push_back(surface[i] + Vec3d(nearSurface(rng), nearSurface(rng), nearSurface(rng)));
+  ASSERT_GT(points.size(), 500u);
+  const std::shared_ptr<const MeshSdfData> data = buildMeshSdfData(*mesh);
+  ASSERT_GT(data->components.size(), 1u);  // hub and blades: overlapping closed components
+  int outside = 0;
+  for (const Vec3d& p : points) {
+    for (std::size_t k = 0; k < data->components.size(); ++k) {
+      double best = std::numeric_limits<double>::infinity();
+      for (std::uint32_t tri : data->components[k]) {
+        const auto& t = mesh->triangles[tri];
+        const Vec3d q = referenceClosest(p, mesh->vertices[t[0]], mesh->vertices[t[1]], mesh->vertices[t[2]]);
+        best = std::min(best, (q - p).norm());
+      }
+      ASSERT_NEAR(std::abs(componentSdf(*mesh, *data, k, p)), best, 1e-12)
+          << "component " << k << " at " << p.transpose();
+    }
+    outside += signedDistanceLocal(c, p) > 0.0 ? 1 : 0;
+  }
+  EXPECT_GT(outside, 300);
 }
 
 }  // namespace
