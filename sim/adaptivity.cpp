@@ -382,7 +382,7 @@ AdaptivityStats Adaptivity::adapt(const AdaptContext& ctx, bool ignoreDelay) {
       if (i >= n || !m_removed[i])
         m_keep.push_back(std::uint32_t(i));
     }
-    p.permute(m_keep);
+    p.retain(m_keep);
   }
   return stats;
 }

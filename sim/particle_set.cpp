@@ -156,6 +156,23 @@ void ParticleSet::permute(const std::vector<std::uint32_t>& order) {
   });
 }
 
+void ParticleSet::retain(const std::vector<std::uint32_t>& keep) {
+  const std::size_t n = keep.size();
+  std::size_t first = 0;  // the particles before the first dropped one stay where they are
+  while (first < n && keep[first] == first)
+    ++first;
+  TaskGroup tasks;
+  forEachField([&](auto& field) {
+    tasks.run([&field, &keep, first, n] {
+      // keep[k] >= k: each particle moves down over one already moved or dropped
+      for (std::size_t k = first; k < n; ++k)
+        field[k] = field[keep[k]];
+      field.resize(n);
+    });
+  });
+  tasks.wait();
+}
+
 double ParticleSet::totalMass() const {
   double sum = 0.0;
   for (Real mi : m)

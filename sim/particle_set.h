@@ -101,6 +101,10 @@ class ParticleSet {
   /// reorders all fields so that new index k holds old particle order[k]; `order` is a permutation, or the
   /// indices of the particles to keep (the others are dropped)
   void permute(const std::vector<std::uint32_t>& order);
+  /// keeps the particles `keep` (strictly ascending indices) in their order and drops the others: in place,
+  /// moving only the particles after the first dropped one, each field on its own task (the merges of an
+  /// adaptation step drop a few particles of thousands: permute() gathered and copied back every field)
+  void retain(const std::vector<std::uint32_t>& keep);
   /// the next unused stable id
   std::uint32_t nextId() const { return m_nextId; }
 

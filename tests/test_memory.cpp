@@ -6,6 +6,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdint>
+#include <vector>
 
 #include "sim/simulation.h"
 #include "tests/scene_fixtures.h"
@@ -80,6 +82,41 @@ TEST(Memory, ParticleArraysGrowBySixteenthsNotByDoubling) {
   EXPECT_EQ(p.x[19999].x(), 19999.0f);
   EXPECT_EQ(p.v[19999], sim::Vec3(1, 2, 3))
       << "an argument that aliased the arrays was read after they moved";
+}
+
+TEST(Memory, RetainDropsParticlesInPlaceAsPermuteDoes) {
+  // the adaptation drops merged and split particles with retain(): every field as permute() leaves it
+  sim::ParticleSet a;
+  a.setAdaptivityFields(true);
+  for (int k = 0; k < 5000; ++k) {
+    const std::size_t i =
+        a.add(sim::Vec3(float(k), float(-k), 0.5f), sim::Vec3(0, float(k), 0), float(k), 1, 1000);
+    a.splitAge[i] = std::uint32_t(k);
+    a.phi[i] = 0.25f * float(k);
+  }
+  sim::ParticleSet b = a;
+  std::vector<std::uint32_t> keep;
+  for (std::uint32_t i = 0; i < 5000; ++i) {
+    if (i % 7 != 3 && i != 0 && i != 4999)  // the first and the last dropped too
+      keep.push_back(i);
+  }
+  a.retain(keep);
+  b.permute(keep);
+  ASSERT_EQ(a.size(), keep.size());
+  ASSERT_EQ(b.size(), keep.size());
+  for (std::size_t k = 0; k < keep.size(); ++k) {
+    ASSERT_EQ(a.x[k], b.x[k]) << k;
+    ASSERT_EQ(a.v[k], b.v[k]) << k;
+    ASSERT_EQ(a.m[k], float(keep[k])) << k;
+    ASSERT_EQ(a.id[k], b.id[k]) << k;
+    ASSERT_EQ(a.splitAge[k], keep[k]) << k;
+    ASSERT_EQ(a.phi[k], b.phi[k]) << k;
+  }
+  EXPECT_EQ(a.splitAge.size(), keep.size());
+  EXPECT_EQ(a.heavySteps.size(), keep.size());
+  a.retain({});  // everything dropped
+  EXPECT_EQ(a.size(), 0u);
+  EXPECT_EQ(a.mOpt.size(), 0u);
 }
 
 TEST(Memory, StaticBoundaryParticlesHoldNoVelocityNorLocalPosition) {
