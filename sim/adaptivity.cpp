@@ -390,7 +390,8 @@ AdaptivityStats Adaptivity::adapt(const AdaptContext& ctx, bool ignoreDelay) {
 void Adaptivity::blendSupports(ParticleSet& p, const SimParams& params, Real mFine) {
   const Real r = Real(params.particleRadius);
   const Real keep = params.supportBlendSteps > 0 ? Real(std::exp(-3.0 / params.supportBlendSteps)) : Real(0);
-  parallelFor(tbb::blocked_range<std::size_t>(0, p.size(), 4096),
+  // (a cube root a particle: worth two threads from about 1,000 particles; the grain does not change results)
+  parallelFor(tbb::blocked_range<std::size_t>(0, p.size(), 512),
               [&](const tbb::blocked_range<std::size_t>& rg) {
                 for (std::size_t i = rg.begin(); i < rg.end(); ++i) {
                   const Real target = supportForMass(p.m[i], mFine, r);
