@@ -222,6 +222,8 @@ double sdfOverTriangles(const TriangleMesh& mesh, const MeshSdfData& data,
   // a triangle whose closest point is within the tolerance of the nearest one's is within it in distance
   thread_local std::vector<std::uint32_t> tris;
   trianglesWithin(data, all, p, data.tolerance, tris);
+  if (tris.empty())  // a non-finite p keeps no triangle: no distance either
+    return std::numeric_limits<double>::infinity();
   thread_local std::vector<ClosestPoint> closest;
   closest.resize(tris.size());
   double best = std::numeric_limits<double>::infinity();

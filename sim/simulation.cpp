@@ -278,11 +278,11 @@ void Simulation::createFluid() {
 void Simulation::coarsenInitialLattice(const std::vector<Eigen::Vector4i>& lattice,
                                        const std::vector<Eigen::Vector3i>& counts) {
   // Cubic blocks of e^3 lattice points become one particle at their centre of mass: on a lattice of such
-  // blocks this reproduces the rest density exactly. Uniform-low merges every block of the largest edge
-  // (e^3 <= mass ratio), partial blocks at the borders included. The adaptive modes merge, largest edge
-  // first, the full blocks whose every point may be that coarse (block mass at most kInitialHeaviness times
-  // each point's optimal mass), so they start graded from fine at the surface to coarse deep down, with no
-  // burst of merges at the first step.
+  // blocks this reproduces the rest density exactly (the adaptive modes' non-cubic blocks below, nearly).
+  // Uniform-low merges every block of the largest edge (e^3 <= mass ratio), partial blocks at the borders
+  // included. The adaptive modes merge, largest edge first, the full blocks whose every point may be that
+  // coarse (block mass at most kInitialHeaviness times each point's optimal mass), so they start graded from
+  // fine at the surface to coarse deep down, with no burst of merges at the first step.
   const std::size_t n = m_fluid.size();
   const int maxEdge = std::max(1, int(std::cbrt(m_params.massRatio + 1e-6)));
   std::vector<Real> target(n, baseMass());
@@ -300,7 +300,7 @@ void Simulation::coarsenInitialLattice(const std::vector<Eigen::Vector4i>& latti
   // block shapes, largest first: the cubes of every edge down to 2, then (adaptive modes) the 2 x 2 x 1 and
   // 2 x 1 x 1 blocks, which give the points whose optimal mass lies between 1 and 4.2 fine masses (the band
   // between the fine surface and the coarse interior) particles of 2 and 4 of them instead of leaving them
-  // fine: the propeller started with 2,520 particles where the adaptation settles at about 2,150
+  // fine: the propeller started with 2,520 particles where the adaptation settles at 2,100-2,200
   std::vector<Eigen::Vector3i> shapes;
   for (int e = maxEdge; e >= 2; --e)
     shapes.emplace_back(e, e, e);
@@ -336,7 +336,7 @@ void Simulation::coarsenInitialLattice(const std::vector<Eigen::Vector4i>& latti
       // Blocks cut by a wall (the lattice keeps 2.2 r from colliders) merge too when at least half full:
       // otherwise a slab of fine particles three layers thick would line every wall.
       const bool fullEnough = 2 * members[key] >= std::uint32_t(volume);
-      if (ok[key] && members[key] > 0 && (fullEnough || !adaptive()))
+      if (ok[key] && members[key] > 1 && (fullEnough || !adaptive()))
         groupOfKey[key] = groups++;
     }
     for (std::size_t id = 0; id < n; ++id) {

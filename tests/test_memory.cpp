@@ -114,6 +114,20 @@ TEST(Memory, RetainDropsParticlesInPlaceAsPermuteDoes) {
   }
   EXPECT_EQ(a.splitAge.size(), keep.size());
   EXPECT_EQ(a.heavySteps.size(), keep.size());
+  // the first 1,000 kept in place, a few dropped after them (the usual step: a handful of merges)
+  sim::ParticleSet c = a;
+  std::vector<std::uint32_t> most;
+  for (std::uint32_t i = 0; i < c.size(); ++i) {
+    if (i < 1000 || i % 97 != 0)
+      most.push_back(i);
+  }
+  c.retain(most);
+  ASSERT_EQ(c.size(), most.size());
+  for (std::size_t k = 0; k < most.size(); ++k) {
+    ASSERT_EQ(c.x[k], a.x[most[k]]) << k;
+    ASSERT_EQ(c.splitAge[k], a.splitAge[most[k]]) << k;
+    ASSERT_EQ(c.id[k], a.id[most[k]]) << k;
+  }
   a.retain({});  // everything dropped
   EXPECT_EQ(a.size(), 0u);
   EXPECT_EQ(a.mOpt.size(), 0u);

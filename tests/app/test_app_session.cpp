@@ -12,6 +12,7 @@
 #include "engine/app_session.h"
 #include "engine/presets.h"
 #include "engine/tracked_hands.h"
+#include "tests/temp_path.h"
 
 using namespace fp;
 using namespace fp::engine;
@@ -20,8 +21,7 @@ namespace {
 
 /// A small tank, 12 cm of water at r = 8 mm: about a thousand particles at uniform-high.
 std::string smallTank(const std::string& mode) {
-  const std::string path =
-      (std::filesystem::path(::testing::TempDir()) / ("fp_app_tank_" + mode + ".json")).string();
+  const std::string path = test::tempPath("tank_" + mode + ".json");
   std::ofstream(path) << R"({
     "name": "small tank", "mode": ")" +
                              mode + R"(",
