@@ -40,6 +40,8 @@ double latticeKernelSum(double H, double d) {
 /// threshold, so they are only "heavy" and share mass down gradually, which starts the run near the
 /// resolution the adaptation settles at instead of with a thick band of fine particles to merge.
 constexpr double kInitialHeaviness = 1.9;
+// supports of the initial lattice's level computation over the particles' 4 r (coarsenInitialLattice)
+constexpr double kLatticeSupportScale = 1.2;
 
 /// ParticleSet::flags bit of a particle on time level 1: its own CFL allows twice the step, and it holds its
 /// acceleration through every other step (docs/method.md, Time levels).
@@ -287,12 +289,22 @@ void Simulation::coarsenInitialLattice(const std::vector<Eigen::Vector4i>& latti
   const int maxEdge = std::max(1, int(std::cbrt(m_params.massRatio + 1e-6)));
   std::vector<Real> target(n, baseMass());
   if (adaptive()) {
+    // The lattice keeps 2.2-4.2 r from walls (createFluid), the support is 4 r: a layer at the far end of
+    // that gap finds no boundary particle in its support and the cone test takes it for a free surface, so
+    // the layers lining the hand tank's z walls and its floor stayed fine (4,385 particles at the start at
+    // r = 5 mm; 3,524 now; the run settles at 2,800-2,900 either way). The lattice's levels are computed with
+    // supports kLatticeSupportScale wider, which reach the wall across the largest gap; the steps that follow
+    // use the particles' own.
+    for (Real& h : m_fluid.H)
+      h = Real(kLatticeSupportScale) * m_support;
     searchNeighbors();
     SolverContext ctx{m_fluid, m_boundary, m_fluidNbrs, m_boundaryNbrs, m_params};
     m_solver.computeDensityAndFactor(ctx);
     computeLevels(false);
     for (std::size_t i = 0; i < n; ++i)
       target[m_fluid.id[i]] = m_target[i];  // ids are the creation order, which indexes `lattice`
+    for (Real& h : m_fluid.H)
+      h = m_support;
   }
   constexpr std::int32_t kNone = -1;
   std::vector<std::int32_t> groupOf(n, kNone);  // by id
