@@ -90,6 +90,9 @@ ParamTable::ParamTable() : ParamTableOf<SimParams>("parameter", &ParamTable::val
       &P::mergeBelow, 0.51);
   add("light_below", "adaptivity", "-", 0.0, 1.0, live, "m / m_opt below which a particle may receive mass",
       &P::lightBelow, 0.9);
+  add("merge_receivers_below", "adaptivity", "-", 0.0, 1.0, live,
+      "m / m_opt below which a particle may receive a merged particle's mass (each up to its m_opt)",
+      &P::mergeReceiversBelow, 1.0);
   add("share_above", "adaptivity", "-", 1.0, 10.0, live,
       "m / m_opt above which a particle shares mass with light neighbours", &P::shareAbove, 1.1);
   add("split_above", "adaptivity", "-", 1.0, 10.0, live, "m / m_opt at or above which a particle splits",
@@ -150,6 +153,8 @@ std::string ParamTable::validate(const SimParams& p) {
     return "splash_alpha_min must not exceed splash_alpha_max";
   if (!(p.mergeBelow < p.lightBelow && p.shareAbove < p.splitAbove))
     return "the thresholds must keep merge_below < light_below <= 1 <= share_above < split_above";
+  if (!(p.mergeBelow < p.mergeReceiversBelow))
+    return "the thresholds must keep merge_below < merge_receivers_below <= 1";
   return {};
 }
 

@@ -61,6 +61,7 @@ struct SimParams {
   int orientationCandidates;
   double mergeBelow;
   double lightBelow;
+  double mergeReceiversBelow;
   double shareAbove;
   double splitAbove;
   double transferRate;

@@ -522,6 +522,62 @@ TEST(AdaptivityTest, MergeLeavesNoSliverOfTheDonorSmall) {
   EXPECT_LT((p.totalMomentum() - momentum).norm(), 1e-6 * mass);
 }
 
+TEST(AdaptivityTest, AMergeFillsNearlyRightNeighboursUpToTheirOptimalMassSmall) {
+  // A too-light donor (q = 0.25) among neighbours at q = 0.95: none is light (q < light_below = 0.9), so with
+  // merge_receivers_below = light_below it stays, and it is tried again every step. With the default (1) they
+  // take it, none above its optimal mass, mass and momentum kept.
+  for (const double receiversBelow : {0.9, 1.0}) {
+    SimParams params;
+    params.particleRadius = 0.01;
+    params.transferRate = 1.0;
+    params.mergeReceiversBelow = receiversBelow;
+    const Real r = Real(params.particleRadius);
+    const Real mFine = Real(params.restDensity * 8e-6);
+    ParticleSet p;
+    const Real H = supportForMass(mFine, mFine, r);
+    // six rooms of 0.05 m_fine hold the donor's 0.25
+    p.add(Vec3::Zero(), Vec3(1, 0, 0), Real(0.25) * mFine, H, 1000.0f);
+    p.mOpt[0] = mFine;
+    for (int k = 0; k < 6; ++k) {
+      Vec3 at = Vec3::Zero();
+      at[k / 2] = Real(k % 2 == 0 ? 2 : -2) * r;
+      const std::size_t j = p.add(at, Vec3(0, Real(k), 0), Real(0.95) * mFine, H, 1000.0f);
+      p.mOpt[j] = mFine;
+    }
+    NeighborList fluidNbrs;
+    NeighborList boundaryNbrs;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      fluidNbrs.offsets.push_back(std::uint32_t(fluidNbrs.indices.size()));
+      boundaryNbrs.offsets.push_back(0);
+      for (std::size_t j = 0; j < p.size(); ++j)
+        if (j != i)
+          fluidNbrs.indices.push_back(std::uint32_t(j));
+    }
+    fluidNbrs.offsets.push_back(std::uint32_t(fluidNbrs.indices.size()));
+    boundaryNbrs.offsets.push_back(0);
+    BoundarySet boundary;
+    std::vector<ColliderState> colliders;
+    const double mass = p.totalMass();
+    const Vec3d momentum = p.totalMomentum();
+    Adaptivity adaptivity;
+    const AdaptivityStats st = adaptivity.adapt(
+        AdaptContext{p, fluidNbrs, boundaryNbrs, boundary, colliders, params, mFine, 0.0, 0}, true);
+    if (receiversBelow < 1.0) {
+      EXPECT_EQ(st.merges, 0u);
+      EXPECT_EQ(p.size(), 7u);
+      continue;
+    }
+    EXPECT_EQ(st.merges, 1u);
+    ASSERT_EQ(p.size(), 6u);
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      EXPECT_GE(p.m[i], Real(0.95) * mFine);
+      EXPECT_LE(double(p.m[i]), double(p.mOpt[i]) * (1 + 1e-6));
+    }
+    EXPECT_NEAR(p.totalMass(), mass, 1e-6 * mass);
+    EXPECT_LT((p.totalMomentum() - momentum).norm(), 1e-6 * mass);
+  }
+}
+
 TEST(AdaptivityTest, NeighbourListsAreInvalidAfterAStepThatSplitOrMergedSmall) {
   SceneDesc scene;
   scene.params.particleRadius = 0.012;
