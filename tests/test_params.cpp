@@ -187,6 +187,9 @@ TEST(ParamTableTest, AssignsKeyValue) {
   EXPECT_EQ(q.dtMin, 0.008);
   EXPECT_EQ(t.assignAll(q, {"dt_min=0.01", "dt_max=0.001"}), "dt_min must not exceed dt_max");
   EXPECT_EQ(t.assignAll(q, {"dt_max=0.01", "bogus=1"}), "unknown parameter 'bogus'");
+  EXPECT_EQ(t.assignAll(q, {"merge_receivers_below=0.5"}),
+            "the thresholds must keep merge_below < merge_receivers_below <= 1");
+  EXPECT_EQ(t.assignAll(q, {"merge_receivers_below=0.9"}), "");
 
   // ranges for options that take them from the table
   EXPECT_EQ(t.at("seed").min, 0.0);
