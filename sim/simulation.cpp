@@ -292,9 +292,8 @@ void Simulation::coarsenInitialLattice(const std::vector<Eigen::Vector4i>& latti
     // The lattice keeps 2.2-4.2 r from walls (createFluid), the support is 4 r: a layer at the far end of
     // that gap finds no boundary particle in its support and the cone test takes it for a free surface, so
     // the layers lining the hand tank's z walls and its floor stayed fine (4,385 particles at the start at
-    // r = 5 mm; 3,524 now). The lattice's levels are computed with
-    // supports kLatticeSupportScale wider, which reach the wall across the largest gap; the steps that follow
-    // use the particles' own.
+    // r = 5 mm; 3,524 now). The lattice's levels are computed with supports kLatticeSupportScale wider,
+    // which reach the wall across the largest gap; the steps that follow use the particles' own.
     for (Real& h : m_fluid.H)
       h = Real(kLatticeSupportScale) * m_support;
     searchNeighbors();
