@@ -219,6 +219,20 @@ std::size_t checkOneOperationPerParticle(const ParticleSet& before, const Partic
   return received;
 }
 
+/// Fills all-pairs fluid neighbour lists for n particles (every other particle is a neighbour) and empty
+/// boundary lists: small hand-built scenes whose particles all lie within each other's support.
+void allPairs(std::size_t n, NeighborList& fluidNbrs, NeighborList& boundaryNbrs) {
+  for (std::size_t i = 0; i < n; ++i) {
+    fluidNbrs.offsets.push_back(std::uint32_t(fluidNbrs.indices.size()));
+    boundaryNbrs.offsets.push_back(0);
+    for (std::size_t j = 0; j < n; ++j)
+      if (j != i)
+        fluidNbrs.indices.push_back(std::uint32_t(j));
+  }
+  fluidNbrs.offsets.push_back(std::uint32_t(fluidNbrs.indices.size()));
+  boundaryNbrs.offsets.push_back(0);
+}
+
 }  // namespace
 
 TEST(AdaptivityTest, EachParticleTakesPartInOneOperationPerStepSmall) {
@@ -498,15 +512,7 @@ TEST(AdaptivityTest, MergeLeavesNoSliverOfTheDonorSmall) {
   }
   NeighborList fluidNbrs;
   NeighborList boundaryNbrs;
-  for (std::size_t i = 0; i < p.size(); ++i) {
-    fluidNbrs.offsets.push_back(std::uint32_t(fluidNbrs.indices.size()));
-    boundaryNbrs.offsets.push_back(0);
-    for (std::size_t j = 0; j < p.size(); ++j)
-      if (j != i)
-        fluidNbrs.indices.push_back(std::uint32_t(j));
-  }
-  fluidNbrs.offsets.push_back(std::uint32_t(fluidNbrs.indices.size()));
-  boundaryNbrs.offsets.push_back(0);
+  allPairs(p.size(), fluidNbrs, boundaryNbrs);
   BoundarySet boundary;
   std::vector<ColliderState> colliders;
   const double mass = p.totalMass();
@@ -546,15 +552,7 @@ TEST(AdaptivityTest, AMergeFillsNearlyRightNeighboursUpToTheirOptimalMassSmall) 
     }
     NeighborList fluidNbrs;
     NeighborList boundaryNbrs;
-    for (std::size_t i = 0; i < p.size(); ++i) {
-      fluidNbrs.offsets.push_back(std::uint32_t(fluidNbrs.indices.size()));
-      boundaryNbrs.offsets.push_back(0);
-      for (std::size_t j = 0; j < p.size(); ++j)
-        if (j != i)
-          fluidNbrs.indices.push_back(std::uint32_t(j));
-    }
-    fluidNbrs.offsets.push_back(std::uint32_t(fluidNbrs.indices.size()));
-    boundaryNbrs.offsets.push_back(0);
+    allPairs(p.size(), fluidNbrs, boundaryNbrs);
     BoundarySet boundary;
     std::vector<ColliderState> colliders;
     const double mass = p.totalMass();
