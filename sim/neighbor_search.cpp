@@ -13,6 +13,9 @@
 #define FP_NEIGHBOR_AVX2 1
 #endif
 
+#include <tbb/global_control.h>
+#include <tbb/task_arena.h>
+
 #include "sim/parallel.h"
 
 namespace fp::sim {
@@ -598,20 +601,54 @@ void NeighborSearch::buildSymmetric(const UniformGrid& grid, const std::vector<V
   m_ownOffsets.swap(out.offsets);
   const std::uint32_t* ownOff = m_ownOffsets.data();
   const Real* h = H.data();
-  // how many larger points hand each point a pair (counts: the same whatever the order of the increments)
-  m_received.assign(n, 0);
-  std::uint32_t* received = m_received.data();
+  // The pairs a point receives from larger points are counted and placed per block of consecutive senders:
+  // no atomics, and since each block's senders write in ascending order into the block's own slots, after
+  // those of the blocks before it, every point's received pairs arrive in ascending order, whatever the
+  // number of blocks or threads. Blocks hold about equal numbers of own pairs.
+  const std::size_t threads =
+      std::min<std::size_t>(std::size_t(tbb::this_task_arena::max_concurrency()),
+                            tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
+  const std::size_t nBlocks = std::max<std::size_t>(1, std::min({2 * threads, std::size_t(16), nChunks}));
+  m_blockFirst.resize(nBlocks + 1);
+  m_blockFirst[0] = 0;
+  for (std::size_t b = 1; b < nBlocks; ++b) {
+    const std::size_t pairs = std::size_t(ownOff[n]) * b / nBlocks;
+    m_blockFirst[b] =
+        std::max(m_blockFirst[b - 1], std::size_t(std::lower_bound(ownOff, ownOff + n, pairs) - ownOff));
+  }
+  m_blockFirst[nBlocks] = n;
+  // per block and point: the pairs it sends to that point, then where the block's next one goes in the
+  // point's received part
+  m_blockSlots.assign(nBlocks * n, 0);
+  std::uint32_t* slots = m_blockSlots.data();
   {
     const std::uint32_t* own = out.indices.data();
-    parallelFor(Range(0, n, 256), [&](const Range& r) {
-      for (std::size_t i = r.begin(); i < r.end(); ++i) {
-        for (std::uint32_t k = ownOff[i]; k < ownOff[i + 1]; ++k) {
-          if (h[own[k]] < h[i])
-            __atomic_fetch_add(&received[own[k]], 1u, __ATOMIC_RELAXED);
+    parallelFor(Range(0, nBlocks, 1), [&](const Range& br) {
+      for (std::size_t b = br.begin(); b < br.end(); ++b) {
+        std::uint32_t* count = slots + b * n;
+        for (std::size_t i = m_blockFirst[b]; i < m_blockFirst[b + 1]; ++i) {
+          for (std::uint32_t k = ownOff[i]; k < ownOff[i + 1]; ++k) {
+            if (h[own[k]] < h[i])
+              ++count[own[k]];
+          }
         }
       }
     });
   }
+  // each point's received pairs, and each block's first slot among them
+  m_received.resize(n);
+  std::uint32_t* received = m_received.data();
+  parallelFor(Range(0, n, 1024), [&](const Range& r) {
+    for (std::size_t i = r.begin(); i < r.end(); ++i) {
+      std::uint32_t sum = 0;
+      for (std::size_t b = 0; b < nBlocks; ++b) {
+        const std::uint32_t c = slots[b * n + i];
+        slots[b * n + i] = sum;
+        sum += c;
+      }
+      received[i] = sum;
+    }
+  });
   // i's list starts after the lists of the points before it: a prefix sum, per chunk and over chunks
   m_chunkPairs.assign(nChunks + 1, 0);
   parallelFor(Range(0, nChunks, 1), [&](const Range& cr) {
@@ -656,7 +693,7 @@ void NeighborSearch::buildSymmetric(const UniformGrid& grid, const std::vector<V
       std::memmove(dst + to, dst + ownOff[i0], length * sizeof(std::uint32_t));
   }
   // ... then, chunk by chunk in parallel, each own list moves left to its final start (front to back, so no
-  // list is overwritten before it moves); `received` becomes where i's next received pair goes
+  // list is overwritten before it moves); `received` becomes where i's received pairs start
   parallelFor(Range(0, nChunks, 1), [&](const Range& cr) {
     for (std::size_t chunk = cr.begin(); chunk < cr.end(); ++chunk) {
       const std::size_t i0 = chunk * kChunk;
@@ -671,20 +708,23 @@ void NeighborSearch::buildSymmetric(const UniformGrid& grid, const std::vector<V
       }
     }
   });
-  // the pairs with larger points, read from the own lists in their final places, written after them
-  parallelFor(Range(0, n, 256), [&](const Range& r) {
-    for (std::size_t i = r.begin(); i < r.end(); ++i) {
-      const std::uint32_t first = out.offsets[i];
-      const std::uint32_t last = first + (ownOff[i + 1] - ownOff[i]);
-      for (std::uint32_t k = first; k < last; ++k) {
-        const std::uint32_t j = dst[k];
-        if (h[j] < h[i])
-          dst[__atomic_fetch_add(&received[j], 1u, __ATOMIC_RELAXED)] = std::uint32_t(i);
+  // the pairs with larger points, read from the own lists in their final places, written after them: each
+  // block into its own slots, in ascending sender order
+  parallelFor(Range(0, nBlocks, 1), [&](const Range& br) {
+    for (std::size_t b = br.begin(); b < br.end(); ++b) {
+      std::uint32_t* next = slots + b * n;
+      for (std::size_t i = m_blockFirst[b]; i < m_blockFirst[b + 1]; ++i) {
+        const std::uint32_t first = out.offsets[i];
+        const std::uint32_t last = first + (ownOff[i + 1] - ownOff[i]);
+        for (std::uint32_t k = first; k < last; ++k) {
+          const std::uint32_t j = dst[k];
+          if (h[j] < h[i])
+            dst[received[j] + next[j]++] = std::uint32_t(i);
+        }
       }
     }
   });
-  // The received pairs arrive in any order: sorted, then merged from the back with the own list (both
-  // ascending), they are build()'s list whatever the thread count.
+  // Both parts ascending: merged from the back, they are build()'s list whatever the thread count.
   parallelFor(Range(0, n, 256), [&](const Range& r) {
     std::vector<std::uint32_t> part;
     for (std::size_t i = r.begin(); i < r.end(); ++i) {
@@ -693,17 +733,24 @@ void NeighborSearch::buildSymmetric(const UniformGrid& grid, const std::vector<V
       const std::size_t size = out.offsets[i + 1] - out.offsets[i];
       if (size == a)
         continue;
+      // the own list may already end below the first received pair
+      if (a == 0 || list[a - 1] < list[a])
+        continue;
       part.assign(list + a, list + size);
-      std::sort(part.begin(), part.end());
+      // branch-free while both parts last (the order of the two is a coin toss for the branch predictor)
       std::size_t ia = a;
       std::size_t ib = part.size();
       std::size_t w = size;
-      while (ib > 0) {
-        if (ia > 0 && list[ia - 1] > part[ib - 1])
-          list[--w] = list[--ia];
-        else
-          list[--w] = part[--ib];
+      while (ia > 0 && ib > 0) {
+        const std::uint32_t fromOwn = list[ia - 1];
+        const std::uint32_t fromReceived = part[ib - 1];
+        const bool own = fromOwn > fromReceived;
+        list[--w] = own ? fromOwn : fromReceived;
+        ia -= own;
+        ib -= !own;
       }
+      while (ib > 0)
+        list[--w] = part[--ib];
     }
   });
 }

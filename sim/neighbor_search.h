@@ -136,8 +136,9 @@ class NeighborSearch {
 
   /// bytes held by scratch buffers (the lists are written in place)
   std::size_t memoryBytes() const {
-    return (m_ownOffsets.capacity() + m_received.capacity()) * sizeof(std::uint32_t) +
-           m_chunkPairs.capacity() * sizeof(std::size_t);
+    return (m_ownOffsets.capacity() + m_received.capacity() + m_blockSlots.capacity()) *
+               sizeof(std::uint32_t) +
+           (m_chunkPairs.capacity() + m_blockFirst.capacity()) * sizeof(std::size_t);
   }
 
  private:
@@ -155,6 +156,10 @@ class NeighborSearch {
   std::vector<std::uint32_t> m_received;
   // buildSymmetric: pairs received by the points of the chunks before each chunk
   std::vector<std::size_t> m_chunkPairs;
+  // buildSymmetric: the first sender of each block of senders, and per block and point the pairs the block
+  // sends it, then the block's next slot among them
+  std::vector<std::size_t> m_blockFirst;
+  std::vector<std::uint32_t> m_blockSlots;
 };
 
 }  // namespace fp::sim
