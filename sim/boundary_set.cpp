@@ -1,5 +1,6 @@
 #include "sim/boundary_set.h"
 
+#include <atomic>
 #include <stdexcept>
 #include <unordered_map>
 
@@ -10,6 +11,12 @@
 namespace fp::sim {
 
 namespace {
+
+/// the next BoundarySet::staticVersion() (0 is a default-constructed set's, which holds no particle)
+std::uint64_t nextStaticVersion() {
+  static std::atomic<std::uint64_t> counter{0};
+  return counter.fetch_add(1, std::memory_order_relaxed) + 1;
+}
 
 /// psi_b = 1 / sum_k W(x_b - x_k, H) over the same collider's particles, with a hashed grid of cell size H.
 void computeVolumes(const std::vector<Vec3>& x, std::size_t begin, std::size_t end, Real H,
@@ -77,6 +84,7 @@ void BoundarySet::build(const std::vector<ColliderState>& colliders, Real partic
     if (pass == 0)
       m_staticCount = x.size();
   }
+  m_staticVersion = nextStaticVersion();
   // built once: no spare capacity from the growth of the vectors
   x.shrink_to_fit();
   v.shrink_to_fit();
@@ -104,6 +112,8 @@ void BoundarySet::permute(std::size_t begin, const std::vector<std::uint32_t>& o
   const std::size_t end = begin + order.size();
   if (!(end <= m_staticCount || begin >= m_staticCount) || end > x.size())
     throw std::logic_error("BoundarySet::permute: the range mixes static and kinematic particles");
+  if (begin < m_staticCount && !order.empty())
+    m_staticVersion = nextStaticVersion();
   auto apply = [&](auto& field, std::size_t s) {
     auto copy = std::vector<typename std::decay_t<decltype(field)>::value_type>(
         field.begin() + std::ptrdiff_t(s), field.begin() + std::ptrdiff_t(s + order.size()));

@@ -45,6 +45,9 @@ class BoundarySet {
   std::size_t size() const { return x.size(); }
   /// particles [0, staticCount()) never move
   std::size_t staticCount() const { return m_staticCount; }
+  /// identifies the static particles as they are: a new value (unique in the process) whenever build() or
+  /// permute() changed them, so a reader may keep what it derived from them (a sorted copy) while it holds
+  std::uint64_t staticVersion() const { return m_staticVersion; }
   /// velocity of boundary particle i, zero for a static one [m/s]
   Vec3 velocity(std::size_t i) const { return i < m_staticCount ? Vec3::Zero() : v[i - m_staticCount]; }
   /// support radius of every boundary particle [m]
@@ -63,6 +66,7 @@ class BoundarySet {
 
  private:
   std::size_t m_staticCount = 0;
+  std::uint64_t m_staticVersion = 0;
   Real m_support = 0;
 };
 

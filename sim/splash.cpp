@@ -63,7 +63,9 @@ void SplashGenerator::searchNeighbors(const ParticleSet& p, const BoundarySet& b
     maxH = std::max(maxH, boundary.support());
   const Vec3d extent = domain.sizes().array() + 2.0 * double(minH);
   const Real cell = std::max(minH, Real(std::cbrt(extent.prod() / kMaxGridCells)));
-  if (cell != m_gridCell || domain.min() != m_gridDomain.min() || domain.max() != m_gridDomain.max()) {
+  const bool gridChanged =
+      cell != m_gridCell || domain.min() != m_gridDomain.min() || domain.max() != m_gridDomain.max();
+  if (gridChanged) {
     m_grid.setup(domain, cell);
     m_gridCell = cell;
     m_gridDomain = domain;
@@ -91,16 +93,43 @@ void SplashGenerator::searchNeighbors(const ParticleSet& p, const BoundarySet& b
   else
     m_search.build(m_grid, m_sorted.x, m_sorted.H, {fluidSrc}, 0, maxH, m_fluidNbrs);
 
-  // boundary: all of it sorted at once (the simulation keeps its static part sorted, we cannot rely on it)
-  m_grid.sort(boundary.x.data(), nb, m_boundaryOrder, m_boundaryCells);
-  m_boundaryX.resize(nb);
-  for (std::size_t s = 0; s < nb; ++s)
-    m_boundaryX[s] = boundary.x[m_boundaryOrder[s]];
-  const GridPoints boundarySrc{m_boundaryX.data(), nullptr, boundary.support(), &m_boundaryCells, 0};
-  m_search.build(m_grid, m_sorted.x, m_sorted.H, {boundarySrc}, -1, maxH, m_boundaryNbrs);
+  // boundary: the static part sorted once per boundary and grid, the kinematic part every call
+  const std::size_t nStatic = boundary.staticCount();
+  const std::size_t nKinematic = nb - nStatic;
+  if (gridChanged || boundary.staticVersion() != m_staticVersion) {
+    if (nStatic > 0)
+      m_grid.sort(boundary.x.data(), nStatic, m_staticOrder, m_staticCells);
+    m_staticX.resize(nStatic);
+    parallelFor(Range(0, nStatic, kGrain), [&](const Range& r) {
+      for (std::size_t s = r.begin(); s < r.end(); ++s)
+        m_staticX[s] = boundary.x[m_staticOrder[s]];
+    });
+    m_staticBounds = pointBounds(m_staticX.data(), nStatic);
+    m_staticVersion = boundary.staticVersion();
+  }
+  if (nKinematic > 0)
+    m_grid.sort(boundary.x.data() + nStatic, nKinematic, m_kinematicOrder, m_kinematicCells);
+  m_kinematicX.resize(nKinematic);
+  parallelFor(Range(0, nKinematic, kGrain), [&](const Range& r) {
+    for (std::size_t s = r.begin(); s < r.end(); ++s)
+      m_kinematicX[s] = boundary.x[nStatic + m_kinematicOrder[s]];
+  });
+  std::vector<GridPoints> walls;
+  if (nStatic > 0)
+    walls.push_back(
+        GridPoints{m_staticX.data(), nullptr, boundary.support(), &m_staticCells, 0, &m_staticBounds});
+  if (nKinematic > 0) {
+    walls.push_back(GridPoints{m_kinematicX.data(), nullptr, boundary.support(), &m_kinematicCells,
+                               std::uint32_t(nStatic)});
+  }
+  m_search.build(m_grid, m_sorted.x, m_sorted.H, walls, -1, maxH, m_boundaryNbrs);
   // back to the caller's boundary indices, which detectSurface and the volumes index
-  for (std::uint32_t& b : m_boundaryNbrs.indices)
-    b = m_boundaryOrder[b];
+  parallelFor(Range(0, m_boundaryNbrs.indices.size(), 4 * kGrain), [&](const Range& r) {
+    for (std::size_t k = r.begin(); k < r.end(); ++k) {
+      std::uint32_t& b = m_boundaryNbrs.indices[k];
+      b = b < nStatic ? m_staticOrder[b] : std::uint32_t(nStatic) + m_kinematicOrder[b - nStatic];
+    }
+  });
 }
 
 const SplashParticles& SplashGenerator::generate(const ParticleSet& p, const BoundarySet& boundary,
@@ -213,8 +242,9 @@ std::size_t SplashGenerator::memoryBytes() const {
   const auto bytes = [](const auto& v) { return v.capacity() * sizeof(v[0]); };
   return bytes(m_out.x) + bytes(m_out.radius) + bytes(m_out.source) + m_search.memoryBytes() +
          m_fluidNbrs.memoryBytes() + m_boundaryNbrs.memoryBytes() + m_sorted.memoryBytes() + bytes(m_order) +
-         bytes(m_fluidCells) + bytes(m_boundaryOrder) + bytes(m_boundaryCells) + bytes(m_boundaryX) +
-         bytes(m_outward) + bytes(m_spawns) + bytes(m_first);
+         bytes(m_fluidCells) + bytes(m_staticOrder) + bytes(m_staticCells) + bytes(m_staticX) +
+         bytes(m_kinematicOrder) + bytes(m_kinematicCells) + bytes(m_kinematicX) + bytes(m_outward) +
+         bytes(m_spawns) + bytes(m_first);
 }
 
 }  // namespace fp::sim

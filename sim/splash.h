@@ -44,8 +44,9 @@ class SplashGenerator {
  public:
   /// Splash of the current state, deterministic per particle id and `frame`; empty when
   /// params.splashEnabled is false or n_splash is 0. Builds its own neighbour grid over `domain` (the
-  /// simulation's lists may be stale after adaptation); reads p.x, v, m, H, rho, id and the boundary. The
-  /// result stays valid until the next call.
+  /// simulation's lists may be stale after adaptation); reads p.x, v, m, H, rho, id and the boundary, whose
+  /// static part it sorts once and keeps while BoundarySet::staticVersion() holds. The result stays valid
+  /// until the next call.
   const SplashParticles& generate(const ParticleSet& p, const BoundarySet& boundary, const SimParams& params,
                                   const Aabb& domain, std::uint64_t frame);
   /// generate() on a simulation's particles, boundary, parameters and domain
@@ -69,9 +70,16 @@ class SplashGenerator {
   ParticleSet m_sorted;                // x, m, H, rho, flags of the caller's particles in cell order
   std::vector<std::uint32_t> m_order;  // m_sorted index s <- caller index m_order[s]
   std::vector<std::uint32_t> m_fluidCells;
-  std::vector<std::uint32_t> m_boundaryOrder;
-  std::vector<std::uint32_t> m_boundaryCells;
-  std::vector<Vec3> m_boundaryX;
+  // the static boundary sorted by cell, kept while the boundary's staticVersion() and the grid hold
+  std::uint64_t m_staticVersion = ~std::uint64_t(0);
+  std::vector<std::uint32_t> m_staticOrder;
+  std::vector<std::uint32_t> m_staticCells;
+  std::vector<Vec3> m_staticX;
+  PointBounds m_staticBounds;
+  // the kinematic boundary sorted by cell, every call
+  std::vector<std::uint32_t> m_kinematicOrder;
+  std::vector<std::uint32_t> m_kinematicCells;
+  std::vector<Vec3> m_kinematicX;
   std::vector<Vec3> m_outward;         // by caller index: unit outward direction, or zero
   std::vector<std::uint8_t> m_spawns;  // by caller index
   std::vector<std::uint32_t> m_first;  // by caller index: first spawner rank

@@ -243,6 +243,49 @@ TEST(SplashTest, ALoneDropletAtRestStillSpraysAndADropletOnTheFloorSpraysUpSmall
   EXPECT_GT((stillSplash[0] - stillSplash[1]).norm(), 1e-4f);
 }
 
+TEST(SplashTest, KeepsItsSortedWallsOnlyWhileTheStaticBoundaryIsTheSameSmall) {
+  // The generator sorts the static boundary once and keeps it while the boundary's staticVersion() holds: a
+  // different tank, and the same tank reordered, each give what a fresh generator gives, the droplet on the
+  // floor spraying up from the floor it rests on.
+  auto tankAt = [](double floorY) {
+    ColliderState tank;
+    tank.desc.shape = ShapeType::Box;
+    tank.desc.container = true;
+    tank.desc.halfExtents = Vec3d(0.1, 0.1, 0.1);
+    tank.desc.position = tank.position = Vec3d(0, floorY + 0.1, 0);
+    BoundarySet boundary;
+    boundary.build({tank}, kR);
+    return boundary;
+  };
+  const BoundarySet first = tankAt(0.0);
+  BoundarySet second = tankAt(-0.04);
+  EXPECT_NE(first.staticVersion(), second.staticVersion());
+  ParticleSet p;
+  const std::size_t onFloor = addParticle(p, Vec3(0.0f, Real(-0.04) + kR, 0.0f));
+  const SimParams params = splashParams();
+  SplashGenerator gen;
+  gen.generate(p, first, params, kDomain, 1);
+  const SplashParticles onSecond = gen.generate(p, second, params, kDomain, 1);
+  SplashGenerator fresh;
+  EXPECT_TRUE(sameBytes(onSecond, fresh.generate(p, second, params, kDomain, 1)));
+  const std::vector<Vec3> up = splashOf(onSecond, onFloor);
+  ASSERT_EQ(up.size(), 4u);
+  for (const Vec3& x : up)
+    EXPECT_NEAR((x - p.x[onFloor]).normalized().y(), 1.0, 1e-4);
+  // reordered: a new version, and the cached order is not used for it
+  const std::uint64_t version = second.staticVersion();
+  std::vector<std::uint32_t> reversed(second.staticCount());
+  for (std::size_t k = 0; k < reversed.size(); ++k)
+    reversed[k] = std::uint32_t(reversed.size() - 1 - k);
+  second.permute(0, reversed);
+  EXPECT_NE(second.staticVersion(), version);
+  const SplashParticles reorderedOut = gen.generate(p, second, params, kDomain, 1);
+  SplashGenerator fresh2;
+  EXPECT_TRUE(sameBytes(reorderedOut, fresh2.generate(p, second, params, kDomain, 1)));
+  for (const Vec3& x : splashOf(reorderedOut, onFloor))
+    EXPECT_NEAR((x - p.x[onFloor]).normalized().y(), 1.0, 1e-4);
+}
+
 TEST(SplashTest, CountsScaleWithNSplashAndSwitchOffSmall) {
   const ParticleSet p = messyScene();
   const ParticleSet before = p;
