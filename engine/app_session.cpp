@@ -587,6 +587,8 @@ void AppSession::runSteps(double target, double budget, bool oneStep) {
       if (oneStep || seconds(Clock::now() - start) > budget)
         break;
     }
+    // the lists of the state the frame shows: the splash reads them, and the next step starts from them
+    simulation.prepareNeighbors();
   } catch (const sim::InstabilityError& e) {
     m_taskError = e.what();
   }

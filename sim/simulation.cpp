@@ -443,15 +443,23 @@ void Simulation::updateColliders() {
 }
 
 void Simulation::searchNeighbors() {
+  searchFluidNeighbors();
+  searchBoundaryNeighbors();
+}
+
+void Simulation::prepareNeighbors() {
+  if (m_neighborsCurrent)
+    return;
+  const auto t0 = Clock::now();
+  searchNeighbors();
+  m_preparedSeconds += seconds(t0, Clock::now());
+  m_neighborsCurrent = true;
+}
+
+void Simulation::searchFluidNeighbors() {
   // fluid: counting sort by cell, then physically reorder so neighbours are close in memory
   m_grid.sort(m_fluid.x.data(), m_fluid.size(), m_order, m_fluidCells);
   m_fluid.permute(m_order);
-  const std::size_t nStatic = m_boundary.staticCount();
-  const std::size_t nKinematic = m_boundary.size() - nStatic;
-  if (nKinematic > 0) {
-    m_grid.sort(m_boundary.x.data() + nStatic, nKinematic, m_order, m_kinematicCells);
-    m_boundary.permute(nStatic, m_order);
-  }
   using Range = tbb::blocked_range<std::size_t>;
   using MinMax = std::pair<Real, Real>;
   const MinMax hRange = parallelReduce(
@@ -465,12 +473,23 @@ void Simulation::searchNeighbors() {
       },
       [](MinMax a, MinMax b) { return MinMax(std::min(a.first, b.first), std::max(a.second, b.second)); });
   const Real maxH = hRange.second;
+  m_searchMaxH = maxH;
 
   GridPoints fluidSrc{m_fluid.x.data(), m_fluid.H.data(), 0, &m_fluidCells, 0};
   if (hRange.first < maxH)  // mixed sizes: each particle searches only as far as its own support
     m_search.buildSymmetric(m_grid, m_fluid.x, m_fluid.H, m_fluidCells, maxH, m_fluidNbrs);
   else
     m_search.build(m_grid, m_fluid.x, m_fluid.H, {fluidSrc}, 0, maxH, m_fluidNbrs);
+}
+
+void Simulation::searchBoundaryNeighbors() {
+  // kinematic boundary particles: sorted like the fluid (the static ones were sorted once, at the start)
+  const std::size_t nStatic = m_boundary.staticCount();
+  const std::size_t nKinematic = m_boundary.size() - nStatic;
+  if (nKinematic > 0) {
+    m_grid.sort(m_boundary.x.data() + nStatic, nKinematic, m_order, m_kinematicCells);
+    m_boundary.permute(nStatic, m_order);
+  }
   std::vector<GridPoints> walls;
   if (nStatic > 0)
     walls.push_back(
@@ -479,7 +498,7 @@ void Simulation::searchNeighbors() {
     walls.push_back(GridPoints{m_boundary.x.data() + nStatic, nullptr, m_boundary.support(),
                                &m_kinematicCells, std::uint32_t(nStatic)});
   }
-  m_search.build(m_grid, m_fluid.x, m_fluid.H, walls, -1, maxH, m_boundaryNbrs);
+  m_search.build(m_grid, m_fluid.x, m_fluid.H, walls, -1, m_searchMaxH, m_boundaryNbrs);
 }
 
 void Simulation::integrateAndCheck(Real dt) {
@@ -633,9 +652,16 @@ void Simulation::step() {
   auto t1 = Clock::now();
   st.times.boundaries = seconds(t0, t1);
 
-  searchNeighbors();
+  // the fluid's lists of the current positions when prepareNeighbors() built them since the last step (the
+  // colliders just moved: the boundary's lists are built again)
+  if (m_neighborsCurrent)
+    searchBoundaryNeighbors();
+  else
+    searchNeighbors();
+  m_neighborsCurrent = false;
   auto t2 = Clock::now();
-  st.times.neighbors = seconds(t1, t2);
+  st.times.neighbors = seconds(t1, t2) + m_preparedSeconds;
+  m_preparedSeconds = 0.0;
   const std::size_t n = m_fluid.size();
   if (n > 0) {
     st.fluidNeighbors = double(m_fluidNbrs.indices.size()) / double(n);

@@ -107,6 +107,14 @@ class Simulation {
   const NeighborList& fluidNeighbors() const { return m_fluidNbrs; }
   /// boundary neighbours of each fluid particle, like fluidNeighbors()
   const NeighborList& boundaryNeighbors() const { return m_boundaryNbrs; }
+  /// Sorts the particles and builds both neighbour lists for the current state, the search the next step()
+  /// would start with: readers between steps (the splash) get the lists of the current positions, and the
+  /// next step searches only the boundary again (its colliders move at its start). The step's results are
+  /// the same bit for bit; its neighbour time includes this search. No-op while neighborsCurrent().
+  void prepareNeighbors();
+  /// true from prepareNeighbors() to the next step(): fluidNeighbors() and boundaryNeighbors() are those of
+  /// the current positions, supports and boundary particles, and the particles are in the search's order
+  bool neighborsCurrent() const { return m_neighborsCurrent; }
   /// true when fluidNeighbors() and boundaryNeighbors() index the current particles
   bool neighborsValid() const {
     return m_fluidNbrs.offsets.size() == m_fluid.size() + 1 &&
@@ -152,6 +160,8 @@ class Simulation {
   AdaptivityStats adaptResolution(bool ignoreDelay);
   void updateColliders();
   void searchNeighbors();
+  void searchFluidNeighbors();
+  void searchBoundaryNeighbors();
   void integrateAndCheck(Real dt);
   std::size_t holdCoarse();
   void reactOnHeld(Real dt);
@@ -182,6 +192,11 @@ class Simulation {
   std::vector<Real> m_heldRho, m_heldKappa, m_heldKappaV;
   std::size_t m_level1 = 0;
   bool m_heldLastStep = false;
+  // prepareNeighbors(): the lists are those of the current state; the largest support of their search; the
+  // wall time of the search, counted in the next step's neighbour time
+  bool m_neighborsCurrent = false;
+  Real m_searchMaxH = 0;
+  double m_preparedSeconds = 0.0;
   NeighborList m_heldNbrs;
   Real m_support = 0;
   Real m_latticeMass = 0;

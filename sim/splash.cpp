@@ -141,7 +141,15 @@ const SplashParticles& SplashGenerator::generate(const ParticleSet& p, const Bou
     return m_out;
 
   searchNeighbors(p, boundary, domain);
-  detectSurface(m_sorted, m_fluidNbrs, m_boundaryNbrs, boundary);
+  return spawn(p, boundary, params, frame, m_fluidNbrs, m_boundaryNbrs);
+}
+
+const SplashParticles& SplashGenerator::spawn(const ParticleSet& p, const BoundarySet& boundary,
+                                              const SimParams& params, std::uint64_t frame,
+                                              const NeighborList& fluidNbrs,
+                                              const NeighborList& boundaryNbrs) {
+  const std::size_t n = p.size();
+  detectSurface(m_sorted, fluidNbrs, boundaryNbrs, boundary);
 
   // spawning particles and their outward directions, by the caller's index
   const std::uint32_t maxNeighbors = std::uint32_t(std::max(params.splashNeighbors, 0));
@@ -151,7 +159,7 @@ const SplashParticles& SplashGenerator::generate(const ParticleSet& p, const Bou
   parallelFor(Range(0, n, kGrain), [&](const Range& range) {
     for (std::size_t s = range.begin(); s < range.end(); ++s) {
       const std::uint32_t i = m_order[s];
-      const bool spawns = (m_sorted.flags[s] & kFlagSurface) && m_fluidNbrs.count(s) < maxNeighbors;
+      const bool spawns = (m_sorted.flags[s] & kFlagSurface) && fluidNbrs.count(s) < maxNeighbors;
       m_spawns[i] = spawns;
       m_outward[i] = Vec3::Zero();
       if (!spawns)
@@ -160,8 +168,8 @@ const SplashParticles& SplashGenerator::generate(const ParticleSet& p, const Bou
       const Real Hi = m_sorted.H[s];
       Vec3 xhat = Vec3::Zero();
       Real magnitude = 0;  // sum of |terms|, the scale of round-off in xhat
-      for (std::uint32_t k = m_fluidNbrs.offsets[s]; k < m_fluidNbrs.offsets[s + 1]; ++k) {
-        const std::uint32_t j = m_fluidNbrs.indices[k];
+      for (std::uint32_t k = fluidNbrs.offsets[s]; k < fluidNbrs.offsets[s + 1]; ++k) {
+        const std::uint32_t j = fluidNbrs.indices[k];
         const Vec3 xij = xi - m_sorted.x[j];
         const Real rho = m_sorted.rho[j];
         const Real vj = rho > Real(0) ? m_sorted.m[j] / rho : Real(0);
@@ -170,11 +178,11 @@ const SplashParticles& SplashGenerator::generate(const ParticleSet& p, const Bou
         xhat += w * xij;
         magnitude += w * r;
       }
-      if (m_boundaryNbrs.count(s) > 0) {
+      if (boundaryNbrs.count(s) > 0) {
         const Real Hib = pairSupport(Hi, Hb);
         const Real scale = Hib / Hb;  // the pair-scaled Akinci volume, as in detectSurface
-        for (std::uint32_t k = m_boundaryNbrs.offsets[s]; k < m_boundaryNbrs.offsets[s + 1]; ++k) {
-          const std::uint32_t b = m_boundaryNbrs.indices[k];
+        for (std::uint32_t k = boundaryNbrs.offsets[s]; k < boundaryNbrs.offsets[s + 1]; ++k) {
+          const std::uint32_t b = boundaryNbrs.indices[k];
           const Vec3 xib = xi - boundary.x[b];
           const Real r = xib.norm();
           const Real w = scale * boundary.psi[b] * CubicSpline::w(r, Hib);
@@ -234,8 +242,32 @@ const SplashParticles& SplashGenerator::generate(const ParticleSet& p, const Bou
 }
 
 const SplashParticles& SplashGenerator::generate(const Simulation& simulation, std::uint64_t frame) {
-  return generate(simulation.particles(), simulation.boundary(), simulation.params(),
-                  simulation.scene().domain, frame);
+  const ParticleSet& p = simulation.particles();
+  const SimParams& params = simulation.params();
+  if (!simulation.neighborsCurrent())
+    return generate(p, simulation.boundary(), params, simulation.scene().domain, frame);
+  // the simulation's lists are those of its current state (Simulation::prepareNeighbors): no search here
+  m_out.clear();
+  const std::size_t n = p.size();
+  if (!params.splashEnabled || params.splashCount <= 0 || n == 0)
+    return m_out;
+  m_order.resize(n);
+  m_sorted.x.resize(n);
+  m_sorted.m.resize(n);
+  m_sorted.H.resize(n);
+  m_sorted.rho.resize(n);
+  m_sorted.flags.assign(n, 0);
+  parallelFor(Range(0, n, kGrain), [&](const Range& r) {
+    for (std::size_t i = r.begin(); i < r.end(); ++i) {
+      m_order[i] = std::uint32_t(i);
+      m_sorted.x[i] = p.x[i];
+      m_sorted.m[i] = p.m[i];
+      m_sorted.H[i] = p.H[i];
+      m_sorted.rho[i] = p.rho[i];
+    }
+  });
+  return spawn(p, simulation.boundary(), params, frame, simulation.fluidNeighbors(),
+               simulation.boundaryNeighbors());
 }
 
 std::size_t SplashGenerator::memoryBytes() const {

@@ -49,7 +49,9 @@ class SplashGenerator {
   /// until the next call.
   const SplashParticles& generate(const ParticleSet& p, const BoundarySet& boundary, const SimParams& params,
                                   const Aabb& domain, std::uint64_t frame);
-  /// generate() on a simulation's particles, boundary, parameters and domain
+  /// generate() on a simulation's particles, boundary, parameters and domain; on its own neighbour lists,
+  /// with no search, where they are those of its current state (Simulation::neighborsCurrent(): the same
+  /// pairs, summed in another order)
   const SplashParticles& generate(const Simulation& simulation, std::uint64_t frame);
 
   /// the result of the last generate()
@@ -59,6 +61,10 @@ class SplashGenerator {
 
  private:
   void searchNeighbors(const ParticleSet& p, const BoundarySet& boundary, const Aabb& domain);
+  /// surface detection and the splash particles, on m_sorted (p in m_order) and lists over it
+  const SplashParticles& spawn(const ParticleSet& p, const BoundarySet& boundary, const SimParams& params,
+                               std::uint64_t frame, const NeighborList& fluidNbrs,
+                               const NeighborList& boundaryNbrs);
 
   SplashParticles m_out;
   UniformGrid m_grid;

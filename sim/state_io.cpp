@@ -515,6 +515,8 @@ class StateAccess {
     // Neighbour lists valid for the restored particles, as after a step (readers such as the splash use
     // them). The sort is stable and the positions are those of the last sort, so the order does not change.
     sim.searchNeighbors();
+    sim.m_neighborsCurrent = false;  // the next step searches them again, as after a step
+    sim.m_preparedSeconds = 0.0;
   }
 };
 

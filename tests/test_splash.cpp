@@ -11,6 +11,7 @@
 #include "sim/kernels.h"
 #include "sim/simulation.h"
 #include "sim/splash.h"
+#include "tests/scene_fixtures.h"
 
 using namespace fp::sim;
 
@@ -284,6 +285,43 @@ TEST(SplashTest, KeepsItsSortedWallsOnlyWhileTheStaticBoundaryIsTheSameSmall) {
   EXPECT_TRUE(sameBytes(reorderedOut, fresh2.generate(p, second, params, kDomain, 1)));
   for (const Vec3& x : splashOf(reorderedOut, onFloor))
     EXPECT_NEAR((x - p.x[onFloor]).normalized().y(), 1.0, 1e-4);
+}
+
+TEST(SplashTest, OnTheSimulationsCurrentListsItSpraysWhatItsOwnSearchGivesSmall) {
+  // Between the app loop's steps the simulation holds the lists of its current state
+  // (Simulation::prepareNeighbors) and the generator uses them instead of searching: the same spawning
+  // particles and splash particles, up to the order of the sums.
+  SceneDesc scene = fp::test::withPaddle(
+      fp::test::tankScene(Vec3d(0.2, 0.12, 0.08), Vec3d(-0.2, 0.0, -0.08), Vec3d(0.2, 0.12, 0.08), 0.01),
+      0.03, Vec3d(-0.1, 0.09, 0.0), Vec3d(0.8, 0.0, 0.0));
+  scene.mode = AdaptivityMode::FluidPlaying;
+  scene.params.massRatio = 8.0;
+  scene.params.splashEnabled = true;
+  scene.params.splashCount = 4;
+  Simulation simulation(scene);
+  for (int k = 0; k < 20; ++k)
+    simulation.step();
+  ASSERT_FALSE(simulation.neighborsCurrent());
+  SplashGenerator own;
+  const SplashParticles searched = own.generate(simulation.particles(), simulation.boundary(),
+                                                simulation.params(), simulation.scene().domain, 7);
+  simulation.prepareNeighbors();
+  // the search reordered the particles: compare by particle id
+  SplashGenerator shared;
+  const SplashParticles& onLists = shared.generate(simulation, 7);
+  SplashGenerator ownAfter;
+  const SplashParticles& reference = ownAfter.generate(simulation.particles(), simulation.boundary(),
+                                                       simulation.params(), simulation.scene().domain, 7);
+  ASSERT_GT(reference.size(), 20u);
+  EXPECT_EQ(searched.size(), reference.size());
+  ASSERT_EQ(onLists.size(), reference.size());
+  double worst = 0.0;
+  for (std::size_t k = 0; k < reference.size(); ++k) {
+    ASSERT_EQ(onLists.source[k], reference.source[k]);
+    worst = std::max(worst, double((onLists.x[k] - reference.x[k]).norm()));
+    EXPECT_EQ(onLists.radius[k], reference.radius[k]);
+  }
+  EXPECT_LT(worst, 1e-6);
 }
 
 TEST(SplashTest, CountsScaleWithNSplashAndSwitchOffSmall) {
