@@ -631,6 +631,37 @@ TEST(MetricsTest, HeightPercentileIsWeightedByMassSmall) {
   EXPECT_EQ(heightPercentile(ParticleSet(), 0.999), 0.0);
 }
 
+TEST(MetricsTest, HeightPercentileSelectsWhatAFullSortGivesSmall) {
+  // weighted selection against the sorted cumulative sum, with ties in height and whole-number masses (exact
+  // sums, so both reach the target at the same particle), over sizes below and above the selection's cut-off
+  std::mt19937 rng(41);
+  for (const std::size_t n : {1u, 7u, 33u, 100u, 2000u}) {
+    ParticleSet p;
+    for (std::size_t i = 0; i < n; ++i) {
+      const Real y = Real(int(rng() % 50)) * Real(0.01);  // many equal heights
+      p.add(Vec3(0, y, 0), Vec3::Zero(), Real(1 + rng() % 27), Real(0.04), 1000.0f);
+    }
+    std::vector<std::pair<double, double>> sorted;
+    for (std::size_t i = 0; i < n; ++i)
+      sorted.emplace_back(double(p.x[i].y()), double(p.m[i]));
+    std::sort(sorted.begin(), sorted.end());
+    double total = 0.0;
+    for (const auto& e : sorted)
+      total += e.second;
+    for (const double fraction : {0.0, 0.1, 0.5, 0.9, 0.999, 1.0}) {
+      double below = 0.0, expected = sorted.back().first;
+      for (const auto& e : sorted) {
+        below += e.second;
+        if (below >= fraction * total) {
+          expected = e.first;
+          break;
+        }
+      }
+      EXPECT_EQ(heightPercentile(p, fraction), expected) << n << " particles, fraction " << fraction;
+    }
+  }
+}
+
 TEST(DivergenceSolveTest, AFineParticleAmongCoarseOnesIsSolvedASurfaceParticleIsNotSmall) {
   // A block of coarse particles (27 finest masses, spacing 6 r) with one of them split into its 27 fine
   // children (spacing 2 r), all moving towards the centre (compression everywhere). A corner child has 7 fine
