@@ -24,6 +24,8 @@ namespace {
 // query points per parallel task; fixed so lists are deterministic, small enough that two threads share a
 // few thousand particles evenly (fine and coarse particles cost very differently)
 constexpr std::size_t kChunk = 128;
+// UniformGrid::sort: below this many points a serial counting sort, above it TBB's parallel sort
+constexpr std::size_t kRadixSortBelow = 16384;
 
 /// |a - b|^2, the distance every pair test of the search uses, spelled out so that the scalar and the AVX2
 /// candidate tests round alike: the order of Eigen's (a - b).squaredNorm() (x^2 + (y^2 + z^2)), with the two
@@ -259,22 +261,67 @@ void UniformGrid::sort(const Vec3* x, std::size_t n, std::vector<std::uint32_t>&
       m_keys[i] = (std::uint64_t(linear(c.x(), c.y(), c.z())) << 32) | std::uint64_t(i);
     }
   });
-  // the keys are unique, so the sorted order is the same whatever the thread count (and the same as a stable
-  // counting sort's); the particles come in nearly sorted from the last step
-  parallelSort(m_keys.begin(), m_keys.end());
   order.resize(n);
-  // the first sorted point of every row (rows are runs of nx cells), by bisection
   m_rowFirst.resize(nRows + 1);
-  parallelFor(Range(0, nRows + 1, 256), [&](const Range& r) {
-    for (std::size_t row = r.begin(); row < r.end(); ++row) {
-      const std::uint64_t key = std::uint64_t(row) * nx << 32;
-      m_rowFirst[row] = std::uint32_t(std::lower_bound(m_keys.begin(), m_keys.end(), key) - m_keys.begin());
+  if (n < kRadixSortBelow) {
+    // Few points (the hand tank, the hand's boundary): a stable counting sort by the cell's x, then by its
+    // row (the keys are unique, so this is the order of sorting them), serial, in two passes of n plus the
+    // buckets, with the rows' first points as the second pass's bucket starts. A comparison sort of the
+    // nearly sorted keys cost 5 times as much.
+    m_radix.resize(n);
+    m_bucket.assign(std::max<std::size_t>(nx, nRows) + 1, 0);
+    std::fill(m_rowFirst.begin(), m_rowFirst.end(), 0u);
+    auto cellOf = [&](std::uint32_t i) { return std::uint32_t(m_keys[i] >> 32); };
+    // cell / nx without a division: the product with 1 / nx in double is off by at most one
+    const double invNx = 1.0 / double(nx);
+    auto rowOf = [&](std::uint32_t cell) {
+      std::uint32_t q = std::uint32_t(double(cell) * invNx);
+      if ((q + 1) * nx <= cell)
+        ++q;
+      else if (q * nx > cell)
+        --q;
+      return q;
+    };
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::uint32_t cell = cellOf(std::uint32_t(i));
+      const std::uint32_t row = rowOf(cell);
+      ++m_bucket[cell - row * nx + 1];
+      ++m_rowFirst[row + 1];
     }
-  });
-  parallelFor(Range(0, n, 4096), [&](const Range& r) {
-    for (std::size_t k = r.begin(); k < r.end(); ++k)
-      order[k] = std::uint32_t(m_keys[k]);
-  });
+    for (std::size_t b = 0; b < nx; ++b)
+      m_bucket[b + 1] += m_bucket[b];
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::uint32_t cell = cellOf(std::uint32_t(i));
+      m_radix[m_bucket[cell - rowOf(cell) * nx]++] = std::uint32_t(i);
+    }
+    for (std::size_t row = 0; row < nRows; ++row)
+      m_rowFirst[row + 1] += m_rowFirst[row];
+    std::copy(m_rowFirst.begin(), m_rowFirst.begin() + std::ptrdiff_t(nRows), m_bucket.begin());
+    for (std::size_t k = 0; k < n; ++k) {
+      const std::uint32_t i = m_radix[k];
+      order[m_bucket[rowOf(cellOf(i))]++] = i;
+    }
+    // the keys in sorted order, which the cell starts below read
+    for (std::size_t k = 0; k < n; ++k)
+      m_radix[k] = cellOf(order[k]);
+    for (std::size_t k = 0; k < n; ++k)
+      m_keys[k] = (std::uint64_t(m_radix[k]) << 32) | std::uint64_t(order[k]);
+  } else {
+    // the keys are unique, so the sorted order is the same whatever the thread count (and the same as a
+    // stable counting sort's); the particles come in nearly sorted from the last step
+    parallelSort(m_keys.begin(), m_keys.end());
+    // the first sorted point of every row (rows are runs of nx cells), by bisection
+    parallelFor(Range(0, nRows + 1, 256), [&](const Range& r) {
+      for (std::size_t row = r.begin(); row < r.end(); ++row) {
+        const std::uint64_t key = std::uint64_t(row) * nx << 32;
+        m_rowFirst[row] = std::uint32_t(std::lower_bound(m_keys.begin(), m_keys.end(), key) - m_keys.begin());
+      }
+    });
+    parallelFor(Range(0, n, 4096), [&](const Range& r) {
+      for (std::size_t k = r.begin(); k < r.end(); ++k)
+        order[k] = std::uint32_t(m_keys[k]);
+    });
+  }
   // header, one word per row (a loop over rows, not points), then the starts of the non-empty rows
   cells.resize(2 + nRows);
   std::size_t pos = 2 + nRows;

@@ -64,7 +64,8 @@ class UniformGrid {
                                                     int cz) const;
   /// bytes held by scratch buffers
   std::size_t memoryBytes() const {
-    return m_keys.capacity() * sizeof(std::uint64_t) + m_rowFirst.capacity() * sizeof(std::uint32_t);
+    return m_keys.capacity() * sizeof(std::uint64_t) +
+           (m_rowFirst.capacity() + m_radix.capacity() + m_bucket.capacity()) * sizeof(std::uint32_t);
   }
 
  private:
@@ -74,6 +75,9 @@ class UniformGrid {
   Eigen::Vector3i m_dims{1, 1, 1};
   std::vector<std::uint64_t> m_keys;      // cell << 32 | original index, sorted
   std::vector<std::uint32_t> m_rowFirst;  // first sorted point of every row of cells
+  // sort() of fewer than kRadixSortBelow points: the first pass's order, then the sorted cells; bucket starts
+  std::vector<std::uint32_t> m_radix;
+  std::vector<std::uint32_t> m_bucket;
 };
 
 /// Neighbour lists in compressed-row form: the neighbours of particle i are indices[offsets[i] ..

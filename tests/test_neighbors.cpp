@@ -141,41 +141,44 @@ TEST(NeighborSearchTest, ListsAreIdenticalForOneAndTwoThreads) {
 }
 
 TEST(NeighborSearchTest, CountingSortIsStableAndComplete) {
-  const Aabb box(Vec3d(0, 0, 0), Vec3d(1, 1, 1));
-  Cloud c = randomCloud(2000, 0.1f, 0.0, 1, box);
-  UniformGrid grid;
-  grid.setup(box, 0.1f);
-  std::vector<std::uint32_t> order, cells;
-  grid.sort(c.x.data(), c.x.size(), order, cells);
-  std::vector<std::uint32_t> sorted = order;
-  std::sort(sorted.begin(), sorted.end());
-  for (std::uint32_t k = 0; k < sorted.size(); ++k) {
-    ASSERT_EQ(sorted[k], k);
-  }
-  EXPECT_EQ(CellRanges(cells).count(), 2000u);
-  // every point is in its own cell's range, in ascending original order within a cell, and the ranges of
-  // all cells (linear order) tile [0, n)
-  std::uint32_t next = 0;
-  const Eigen::Vector3i dims = grid.dims();
-  for (int cz = 0; cz < dims.z(); ++cz) {
-    for (int cy = 0; cy < dims.y(); ++cy) {
-      for (int cx = 0; cx < dims.x(); ++cx) {
-        const auto [b, e] = grid.cellRange(cells, cx, cy, cz);
-        if (b == e)
-          continue;
-        ASSERT_EQ(b, next);
-        next = e;
-        for (std::uint32_t k = b; k < e; ++k) {
-          const Eigen::Vector3i cc = grid.cellCoord(c.x[order[k]]);
-          ASSERT_EQ(cc, Eigen::Vector3i(cx, cy, cz));
-          if (k > b) {
-            ASSERT_LT(order[k - 1], order[k]);  // stable
+  // below and above the count where the sort switches from a serial counting sort to TBB's parallel sort
+  for (const std::uint32_t n : {2000u, 20000u}) {
+    const Aabb box(Vec3d(0, 0, 0), Vec3d(1, 1, 1));
+    Cloud c = randomCloud(n, 0.1f, 0.0, 1, box);
+    UniformGrid grid;
+    grid.setup(box, 0.1f);
+    std::vector<std::uint32_t> order, cells;
+    grid.sort(c.x.data(), c.x.size(), order, cells);
+    std::vector<std::uint32_t> sorted = order;
+    std::sort(sorted.begin(), sorted.end());
+    for (std::uint32_t k = 0; k < sorted.size(); ++k) {
+      ASSERT_EQ(sorted[k], k);
+    }
+    EXPECT_EQ(CellRanges(cells).count(), n);
+    // every point is in its own cell's range, in ascending original order within a cell, and the ranges of
+    // all cells (linear order) tile [0, n)
+    std::uint32_t next = 0;
+    const Eigen::Vector3i dims = grid.dims();
+    for (int cz = 0; cz < dims.z(); ++cz) {
+      for (int cy = 0; cy < dims.y(); ++cy) {
+        for (int cx = 0; cx < dims.x(); ++cx) {
+          const auto [b, e] = grid.cellRange(cells, cx, cy, cz);
+          if (b == e)
+            continue;
+          ASSERT_EQ(b, next) << n << " points";
+          next = e;
+          for (std::uint32_t k = b; k < e; ++k) {
+            const Eigen::Vector3i cc = grid.cellCoord(c.x[order[k]]);
+            ASSERT_EQ(cc, Eigen::Vector3i(cx, cy, cz)) << n << " points";
+            if (k > b) {
+              ASSERT_LT(order[k - 1], order[k]) << n << " points";  // stable
+            }
           }
         }
       }
     }
+    EXPECT_EQ(next, n);
   }
-  EXPECT_EQ(next, 2000u);
 }
 
 TEST(NeighborSearchTest, CompactCellsCostARowNotACellPerEmptyRow) {
