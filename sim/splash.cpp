@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 
 #include "sim/kernels.h"
 #include "sim/levels.h"
@@ -49,6 +50,24 @@ void SplashParticles::clear() {
   source.clear();
 }
 
+void SplashGenerator::copyInOrder(const ParticleSet& p) {
+  const std::size_t n = m_order.size();
+  m_sorted.x.resize(n);
+  m_sorted.m.resize(n);
+  m_sorted.H.resize(n);
+  m_sorted.rho.resize(n);
+  m_sorted.flags.assign(n, 0);
+  parallelFor(Range(0, n, kGrain), [&](const Range& r) {
+    for (std::size_t s = r.begin(); s < r.end(); ++s) {
+      const std::uint32_t i = m_order[s];
+      m_sorted.x[s] = p.x[i];
+      m_sorted.m[s] = p.m[i];
+      m_sorted.H[s] = p.H[i];
+      m_sorted.rho[s] = p.rho[i];
+    }
+  });
+}
+
 void SplashGenerator::searchNeighbors(const ParticleSet& p, const BoundarySet& boundary, const Aabb& domain) {
   const std::size_t n = p.size();
   const std::size_t nb = boundary.size();
@@ -73,20 +92,7 @@ void SplashGenerator::searchNeighbors(const ParticleSet& p, const BoundarySet& b
 
   // fluid: our own sorted copy of the fields the search and detectSurface read
   m_grid.sort(p.x.data(), n, m_order, m_fluidCells);
-  m_sorted.x.resize(n);
-  m_sorted.m.resize(n);
-  m_sorted.H.resize(n);
-  m_sorted.rho.resize(n);
-  m_sorted.flags.assign(n, 0);
-  parallelFor(Range(0, n, kGrain), [&](const Range& r) {
-    for (std::size_t s = r.begin(); s < r.end(); ++s) {
-      const std::uint32_t i = m_order[s];
-      m_sorted.x[s] = p.x[i];
-      m_sorted.m[s] = p.m[i];
-      m_sorted.H[s] = p.H[i];
-      m_sorted.rho[s] = p.rho[i];
-    }
-  });
+  copyInOrder(p);
   const GridPoints fluidSrc{m_sorted.x.data(), m_sorted.H.data(), 0, &m_fluidCells, 0};
   if (minH < fluidMaxH)  // mixed sizes: each particle searches only as far as its own support (same lists)
     m_search.buildSymmetric(m_grid, m_sorted.x, m_sorted.H, m_fluidCells, fluidMaxH, m_fluidNbrs);
@@ -252,20 +258,8 @@ const SplashParticles& SplashGenerator::generate(const Simulation& simulation, s
   if (!params.splashEnabled || params.splashCount <= 0 || n == 0)
     return m_out;
   m_order.resize(n);
-  m_sorted.x.resize(n);
-  m_sorted.m.resize(n);
-  m_sorted.H.resize(n);
-  m_sorted.rho.resize(n);
-  m_sorted.flags.assign(n, 0);
-  parallelFor(Range(0, n, kGrain), [&](const Range& r) {
-    for (std::size_t i = r.begin(); i < r.end(); ++i) {
-      m_order[i] = std::uint32_t(i);
-      m_sorted.x[i] = p.x[i];
-      m_sorted.m[i] = p.m[i];
-      m_sorted.H[i] = p.H[i];
-      m_sorted.rho[i] = p.rho[i];
-    }
-  });
+  std::iota(m_order.begin(), m_order.end(), 0u);
+  copyInOrder(p);
   return spawn(p, simulation.boundary(), params, frame, simulation.fluidNeighbors(),
                simulation.boundaryNeighbors());
 }

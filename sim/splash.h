@@ -61,6 +61,8 @@ class SplashGenerator {
 
  private:
   void searchNeighbors(const ParticleSet& p, const BoundarySet& boundary, const Aabb& domain);
+  /// m_sorted's x, m, H, rho: p's in m_order; flags cleared
+  void copyInOrder(const ParticleSet& p);
   /// surface detection and the splash particles, on m_sorted (p in m_order) and lists over it
   const SplashParticles& spawn(const ParticleSet& p, const BoundarySet& boundary, const SimParams& params,
                                std::uint64_t frame, const NeighborList& fluidNbrs,
