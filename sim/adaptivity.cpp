@@ -200,81 +200,44 @@ void Adaptivity::planSplit(const AdaptContext& ctx, SplitPlan& plan) const {
   }
 }
 
-void Adaptivity::collectOffers(const AdaptContext& ctx, bool all) {
-  const ParticleSet& p = ctx.fluid;
+bool Adaptivity::transferMass(const AdaptContext& ctx, std::size_t donor, double amount, bool all) {
+  ParticleSet& p = ctx.fluid;
   const SimParams& params = ctx.params;
+  m_candidates.clear();
+  double capacity = 0.0;
+  // the transfer rate is per solver step: an adaptation every k steps may move k times as much
+  const double rate = params.transferRate * double(std::max(1, params.adaptationPeriod));
   // A share goes to light neighbours (q < light_below). A merge may also fill neighbours that are nearly
   // right (q < merge_receivers_below, 1 by default) up to their optimal mass: with light ones only, a
   // too-light particle among right ones found no room, stayed, and was tried again every step (the hand tank
   // at r = 5 mm: about 560 failed merges a step, 19 % of its particles staying too light).
   const Real receiverBelow = Real(all ? params.mergeReceiversBelow : params.lightBelow);
-  const std::size_t nDonors = m_donors.size();
-  // room for each donor's whole list
-  m_offerStart.resize(nDonors + 1);
-  m_offerCount.resize(nDonors);
-  m_offerStart[0] = 0;
-  for (std::size_t k = 0; k < nDonors; ++k)
-    m_offerStart[k + 1] = m_offerStart[k] + std::uint32_t(ctx.fluidNbrs.count(m_donors[k]));
-  m_offers.resize(m_offerStart[nDonors]);
-  m_sortedOffers.resize(m_offerStart[nDonors]);
-  parallelFor(tbb::blocked_range<std::size_t>(0, nDonors, 16), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t k = r.begin(); k < r.end(); ++k) {
-      const std::uint32_t donor = m_donors[k];
-      std::pair<Real, std::uint32_t>* out = m_offers.data() + m_offerStart[k];
-      std::uint32_t count = 0;
-      for (std::uint32_t q = ctx.fluidNbrs.offsets[donor]; q < ctx.fluidNbrs.offsets[donor + 1]; ++q) {
-        const std::uint32_t j = ctx.fluidNbrs.indices[q];
-        if (p.m[j] >= receiverBelow * p.mOpt[j])
-          continue;
-        const Real distance = (p.x[j] - p.x[donor]).norm();
-        if (distance >= pairSupport(p.H[j], p.H[donor]))
-          continue;
-        out[count++] = {distance, j};
-      }
-      m_offerCount[k] = count;
-      std::pair<Real, std::uint32_t>* sorted = m_sortedOffers.data() + m_offerStart[k];
-      std::copy(out, out + count, sorted);
-      std::sort(sorted, sorted + count);
-    }
-  });
-}
-
-bool Adaptivity::transferMass(const AdaptContext& ctx, std::size_t slot, double amount, bool all) {
-  ParticleSet& p = ctx.fluid;
-  const SimParams& params = ctx.params;
-  const std::uint32_t donor = m_donors[slot];
-  // the transfer rate is per solver step: an adaptation every k steps may move k times as much
-  const double rate = params.transferRate * double(std::max(1, params.adaptationPeriod));
-  const std::pair<Real, std::uint32_t>* offers = m_offers.data() + m_offerStart[slot];
-  const std::pair<Real, std::uint32_t>* sortedOffers = m_sortedOffers.data() + m_offerStart[slot];
-  const std::uint32_t count = m_offerCount[slot];
-  auto open = [&](std::uint32_t j) { return !m_locked[j] && !m_removed[j]; };
-  bool any = false;
-  double capacity = 0.0;
-  for (std::uint32_t k = 0; k < count; ++k) {
-    const std::uint32_t j = offers[k].second;
-    if (!open(j))
+  for (std::uint32_t k = ctx.fluidNbrs.offsets[donor]; k < ctx.fluidNbrs.offsets[donor + 1]; ++k) {
+    const std::uint32_t j = ctx.fluidNbrs.indices[k];
+    if (m_locked[j] || m_removed[j])
       continue;
-    any = true;
+    if (p.m[j] >= receiverBelow * p.mOpt[j])
+      continue;
+    const Real distance = (p.x[j] - p.x[donor]).norm();
+    if (distance >= pairSupport(p.H[j], p.H[donor]))
+      continue;
+    m_candidates.emplace_back(distance, j);
     capacity += std::min(double(p.mOpt[j]) - double(p.m[j]), rate * double(p.m[j]));
   }
   // (a merge whose receivers have room for all but round-off of the donor goes ahead: see below)
-  if (!any || capacity <= 0.0 || (all && capacity < amount * (1.0 - 1e-9)))
+  if (m_candidates.empty() || capacity <= 0.0 || (all && capacity < amount * (1.0 - 1e-9)))
     return false;
-  // nearest receivers first, each filled up to its optimal mass (the open ones of the sorted offers: the ones
-  // that receive below are locked only after they are passed)
+  // nearest receivers first, each filled up to its optimal mass
+  std::sort(m_candidates.begin(), m_candidates.end());
   double left = amount;
   const double mDonor = p.m[donor];
   const Vec3d xDonor = p.x[donor].cast<double>();
   const Vec3d vDonor = p.v[donor].cast<double>();
   constexpr std::uint32_t kNoReceiver = ~std::uint32_t(0);
   std::uint32_t last = kNoReceiver;
-  for (std::uint32_t k = 0; k < count; ++k) {
-    const std::uint32_t j = sortedOffers[k].second;
+  for (const auto& [distance, j] : m_candidates) {
     if (left <= 0.0)
       break;
-    if (!open(j))
-      continue;
     // Each receiver grows by at most `transfer_rate` of its mass per step: a particle whose mass jumps (say
     // doubles) carries a density error of the same order that the pressure solve must undo in one step. A
     // merge thus spreads its donor over several receivers, or waits for a step where they have room. (Letting
@@ -330,10 +293,8 @@ AdaptivityStats Adaptivity::adapt(const AdaptContext& ctx, bool ignoreDelay) {
   m_locked.assign(n, 0);
   m_removed.assign(n, 0);
   m_ops.resize(n);
-  parallelFor(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t i = r.begin(); i < r.end(); ++i)
-      m_ops[i] = ParticleOps{p.id[i], 0, 0};
-  });
+  for (std::size_t i = 0; i < n; ++i)
+    m_ops[i] = ParticleOps{p.id[i], 0, 0};
 
   auto ratio = [&](std::size_t i) { return p.m[i] / p.mOpt[i]; };
   // the split delay counts solver steps, whatever the adaptation period
@@ -343,17 +304,9 @@ AdaptivityStats Adaptivity::adapt(const AdaptContext& ctx, bool ignoreDelay) {
       p.heavySteps[i] = ratio(i) >= Real(params.splitAbove) ? p.heavySteps[i] + period : 0;
   });
 
-  // merge n:(n-1): a too-light particle goes into its nearest light neighbours, in index order (each
-  // merge locks its receivers); who may receive is collected first, in parallel
-  m_donors.clear();
+  // merge n:(n-1): a too-light particle goes into its nearest light neighbours
   for (std::size_t i = 0; i < n; ++i) {
-    if (ratio(i) < Real(params.mergeBelow))
-      m_donors.push_back(std::uint32_t(i));
-  }
-  collectOffers(ctx, true);
-  for (std::size_t k = 0; k < m_donors.size(); ++k) {
-    const std::uint32_t i = m_donors[k];
-    if (!m_locked[i] && transferMass(ctx, k, p.m[i], true))
+    if (!m_locked[i] && ratio(i) < Real(params.mergeBelow) && transferMass(ctx, i, p.m[i], true))
       ++stats.merges;
   }
 
@@ -421,17 +374,10 @@ AdaptivityStats Adaptivity::adapt(const AdaptContext& ctx, bool ignoreDelay) {
   // target as the target is to the levels, and sharing would only churn water at rest
   constexpr double kTargetBand = 0.3;
   const Real shareAbove = Real(std::max(params.shareAbove, 1.0 + kTargetBand));
-  m_donors.clear();
   for (std::size_t i = 0; i < n; ++i) {
-    if (!m_locked[i] && ratio(i) >= shareAbove)
-      m_donors.push_back(std::uint32_t(i));
-  }
-  collectOffers(ctx, false);
-  for (std::size_t k = 0; k < m_donors.size(); ++k) {
-    const std::uint32_t i = m_donors[k];
-    if (m_locked[i])
+    if (m_locked[i] || ratio(i) < shareAbove)
       continue;
-    if (transferMass(ctx, k, 0.5 * (double(p.m[i]) - double(p.mOpt[i])), false))
+    if (transferMass(ctx, i, 0.5 * (double(p.m[i]) - double(p.mOpt[i])), false))
       ++stats.redistributions;
   }
 
@@ -586,10 +532,8 @@ void Adaptivity::ageSplitChildren(ParticleSet& p, const SimParams& params) {
 
 std::size_t Adaptivity::memoryBytes() const {
   return m_locked.capacity() + m_removed.capacity() + m_ops.capacity() * sizeof(ParticleOps) +
-         m_plans.capacity() * sizeof(SplitPlan) +
-         (m_keep.capacity() + m_donors.capacity() + m_offerStart.capacity() + m_offerCount.capacity()) *
-             sizeof(std::uint32_t) +
-         (m_offers.capacity() + m_sortedOffers.capacity()) * sizeof(m_offers[0]);
+         m_plans.capacity() * sizeof(SplitPlan) + m_keep.capacity() * sizeof(std::uint32_t) +
+         m_candidates.capacity() * sizeof(m_candidates[0]);
 }
 
 }  // namespace fp::sim

@@ -114,15 +114,9 @@ class Adaptivity {
   };
   void planSplit(const AdaptContext& ctx, SplitPlan& plan) const;
   static std::vector<Vec3> childPositions(const AdaptContext& ctx, std::size_t o, int n, int candidate);
-  /// For each of m_donors (in parallel): its neighbours that may receive from it (below their optimal mass by
-  /// the merge's or the share's bound, within the pair support), in list order and sorted by distance. What
-  /// decides this never changes for a particle before it takes part in an operation (and is then locked), so
-  /// the serial transfers that follow only skip the locked ones.
-  void collectOffers(const AdaptContext& ctx, bool all);
-  /// moves up to `amount` of donor m_donors[slot]'s mass and momentum to its offers' unlocked receivers; with
-  /// `all` the donor is removed once all its mass is given. True for a completed merge (all) or any share
-  /// (!all).
-  bool transferMass(const AdaptContext& ctx, std::size_t slot, double amount, bool all);
+  /// moves up to `amount` of the donor's mass and momentum to its light neighbours; with `all` the donor is
+  /// removed once all its mass is given. True for a completed merge (all) or any share (!all).
+  bool transferMass(const AdaptContext& ctx, std::size_t donor, double amount, bool all);
   void note(std::size_t i, OpKind kind) {
     m_ops[i].kinds = std::uint8_t(m_ops[i].kinds | kind);
     ++m_ops[i].count;
@@ -133,13 +127,7 @@ class Adaptivity {
   std::vector<ParticleOps> m_ops;
   std::vector<SplitPlan> m_plans;
   std::vector<std::uint32_t> m_keep;
-  // collectOffers: the donors of one pass, the start of each one's offers (list order, and sorted by
-  // (distance, index)) and their count
-  std::vector<std::uint32_t> m_donors;
-  std::vector<std::uint32_t> m_offerStart;
-  std::vector<std::uint32_t> m_offerCount;
-  std::vector<std::pair<Real, std::uint32_t>> m_offers;
-  std::vector<std::pair<Real, std::uint32_t>> m_sortedOffers;
+  std::vector<std::pair<Real, std::uint32_t>> m_candidates;
 };
 
 }  // namespace fp::sim
