@@ -422,6 +422,8 @@ void NeighborSearch::buildLists(const UniformGrid& grid, const std::vector<Vec3>
     }
     bounds[s] = box;
   }
+  // the starts of an empty row (every cell of a row of the grid empty)
+  const std::vector<std::uint32_t> zeroRow(std::size_t(dims.x()) + 1, 0);
   auto searchChunk = [&](std::size_t chunk) {
     const std::size_t room = roomStart[chunk + 1] - roomStart[chunk];
     std::uint32_t* dst = out.indices.data() + roomStart[chunk];
@@ -500,57 +502,55 @@ void NeighborSearch::buildLists(const UniformGrid& grid, const std::vector<Vec3>
           const Real d = slabDistance(xi.z(), origin.z() + Real(cz) * cell, cell, margin);
           dz2[cz] = d * d;
         }
-        runs.clear();
+        if (runs.size() < spanY * spanZ)
+          runs.resize(spanY * spanZ);
+        std::size_t nRuns = 0;
         std::size_t candidates = 0;
-        auto addRun = [&](std::uint32_t b, std::uint32_t e) {
-          runs.push_back(Run{b, e});
-          candidates += e - b;
-        };
         for (int cz = z0; cz <= z1; ++cz) {
           const Real dzz = dz2[cz];
           if (dzz >= hMax2)
             continue;
           const std::uint32_t* rowOffsets = ranges.data() + 2 + std::uint32_t(cz * dims.y());
           for (int cy = y0; cy <= y1; ++cy) {
-            const Real dyz2 = dy2[cy] + dzz;
-            if (dyz2 >= hMax2)
-              continue;
-            // a row with no point at all costs one load
+            // Each row of the plane is written as a run and kept by advancing the count when it is within
+            // reach and holds a point in x0..x1 (an empty row reads the zero row): no branch per row, whose
+            // outcome the predictor could not learn. The whole row x0..x1 is tested: trimming its ends to
+            // the cells within reach (by geometry, or by the cells' largest supports) cost more in
+            // mispredicted branches than the candidates it saved, with the candidates tested 8 at a time or
+            // branch-free (the search of the hand tank at r = 5 mm took 1.7x as long with the trimming).
+            // Cells x0..x1 of one row are contiguous in the sorted arrays.
             const std::uint32_t rowBase = rowOffsets[cy];
-            if (rowBase == 0)
-              continue;
-            // the row's cell starts; a row with no point in the whole reach (most rows of the walls) costs
-            // two
-            const std::uint32_t* start = ranges.data() + rowBase;
-            if (start[x0] == start[x1 + 1])
-              continue;
-            // The whole row x0..x1 is tested: trimming its ends to the cells within reach (by geometry, or
-            // by the cells' largest supports) cost more in mispredicted branches than the candidates it
-            // saved, with the candidates tested 8 at a time or branch-free (the search of the hand tank at
-            // r = 5 mm took 1.7x as long with the trimming). Cells x0..x1 of one row are contiguous in the
-            // sorted arrays.
-            addRun(start[x0], start[x1 + 1]);
+            const std::uint32_t* start = rowBase != 0 ? ranges.data() + rowBase : zeroRow.data();
+            const std::uint32_t b = start[x0];
+            const std::uint32_t e = start[x1 + 1];
+            const bool keep = dy2[cy] + dzz < hMax2;
+            runs[nRuns] = Run{b, e};
+            const std::uint32_t length = keep ? e - b : 0;
+            candidates += length;
+            nRuns += length != 0;
           }
         }
         // the candidates of all rows, in row order
         const Real* sH = src.H;
 #ifdef FP_NEIGHBOR_AVX2
         if (simd && count + candidates + 7 <= room) {
-          count += sH ? testRunsAvx2<true>(test, sx, sH, runs.data(), runs.size(),
-                                           sourceCount[std::size_t(s)], dst + count)
-                      : testRunsAvx2<false>(test, sx, sH, runs.data(), runs.size(),
-                                            sourceCount[std::size_t(s)], dst + count);
+          count += sH ? testRunsAvx2<true>(test, sx, sH, runs.data(), nRuns, sourceCount[std::size_t(s)],
+                                           dst + count)
+                      : testRunsAvx2<false>(test, sx, sH, runs.data(), nRuns, sourceCount[std::size_t(s)],
+                                            dst + count);
           continue;
         }
 #endif
         if (count + candidates <= room) {
           // room for every candidate: written unconditionally, kept by advancing the count
-          for (const Run& run : runs) {
+          for (std::size_t k = 0; k < nRuns; ++k) {
+            const Run& run = runs[k];
             count += sH ? testCandidates<true>(test, sx, sH, run.b, run.e, dst + count)
                         : testCandidates<false>(test, sx, sH, run.b, run.e, dst + count);
           }
         } else {
-          for (const Run& run : runs) {
+          for (std::size_t k = 0; k < nRuns; ++k) {
+            const Run& run = runs[k];
             for (std::uint32_t j = run.b; j < run.e; ++j) {
               const Real h = sH ? Real(0.5) * (Hi + sH[j]) : hMax;
               if (j != skip && distance2(xi, sx[j]) < h * h && (!sH || sH[j] <= hCap))
