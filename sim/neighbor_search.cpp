@@ -249,6 +249,33 @@ Eigen::Vector3i UniformGrid::cellCoord(const Vec3& p) const {
   return c;
 }
 
+void CellClearance::build(const UniformGrid& grid, const Vec3* x, std::size_t n, Real reach) {
+  m_dims = grid.dims();
+  m_origin = grid.origin();
+  const double cell = double(grid.cellSize());
+  m_invCellSize = Real(1) / grid.cellSize();
+  m_unit = Real(cell / 32.0);
+  const int k = std::clamp(int(std::ceil(double(reach) / cell)), 1, 7);
+  // every point is at least k cells from a cell it does not look at (k cells on every side of its own)
+  m_bound.assign(grid.cellCount(), std::uint8_t(32 * k));
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3i c = grid.cellCoord(x[i]);
+    const Eigen::Vector3d p = x[i].cast<double>();
+    for (int cz = std::max(0, c.z() - k); cz <= std::min(m_dims.z() - 1, c.z() + k); ++cz) {
+      for (int cy = std::max(0, c.y() - k); cy <= std::min(m_dims.y() - 1, c.y() + k); ++cy) {
+        for (int cx = std::max(0, c.x() - k); cx <= std::min(m_dims.x() - 1, c.x() + k); ++cx) {
+          // distance from the point to the cell's box, rounded down to the unit
+          const Eigen::Vector3d lo = m_origin.cast<double>() + cell * Eigen::Vector3d(cx, cy, cz);
+          const Eigen::Vector3d hi = lo + Eigen::Vector3d::Constant(cell);
+          const double d = (p - p.cwiseMax(lo).cwiseMin(hi)).norm();
+          std::uint8_t& b = m_bound[grid.linear(cx, cy, cz)];
+          b = std::uint8_t(std::min<double>(b, std::floor(d * 32.0 / cell)));
+        }
+      }
+    }
+  }
+}
+
 void UniformGrid::sort(const Vec3* x, std::size_t n, std::vector<std::uint32_t>& order,
                        std::vector<std::uint32_t>& cells) {
   using Range = tbb::blocked_range<std::size_t>;
@@ -465,9 +492,12 @@ void NeighborSearch::buildLists(const UniformGrid& grid, const std::vector<Vec3>
         const Real hCap = ownSupport ? Hi : std::numeric_limits<Real>::infinity();
         const Real hMax2 = hMax * hMax;
         const CandidateTest test{xi, Hi, hMax2, hCap, skip, offset};
-        // a source wholly out of reach (the hand, far from most of the water) costs no row at all
+        // a source wholly out of reach (the hand, far from most of the water; walls farther than the query's
+        // support by their clearance) costs no row at all
         if ((xi - xi.cwiseMax(bounds[std::size_t(s)].min()).cwiseMin(bounds[std::size_t(s)].max()))
                 .squaredNorm() >= hMax2)
+          continue;
+        if (src.clearance && src.clearance->lowerBound(xi) >= hMax + margin)
           continue;
         const int reach = std::max(1, int(std::ceil(hMax * invCell)));
         int x0 = std::max(0, c.x() - reach), x1 = std::min(dims.x() - 1, c.x() + reach);

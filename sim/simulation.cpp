@@ -170,6 +170,14 @@ Simulation::Simulation(const SceneDesc& scene) : m_scene(scene), m_params(scene.
   // filled in by the first adaptation steps, gradually, as during the run. (Settling it before time starts,
   // with supports set at once, left density errors of several percent.)
   createFluid();
+  {
+    // the walls' clearance, looked at as far as the coarsest particle's pair support with them reaches
+    Real maxH = m_support;
+    for (Real h : m_fluid.H)
+      maxH = std::max(maxH, h);
+    m_staticClearance.build(m_grid, m_boundary.x.data(), m_boundary.staticCount(),
+                            Real(0.5) * (maxH + m_boundary.support()));
+  }
   m_dt = Real(m_params.dtMax);
   // The split templates are built once per process on first use (0.1-0.3 s): here, not in the first step
   // that splits, whose adaptation time it would otherwise swell (0.2 ms a step over a 1 s hand-tank run).
@@ -492,8 +500,8 @@ void Simulation::searchBoundaryNeighbors() {
   }
   std::vector<GridPoints> walls;
   if (nStatic > 0)
-    walls.push_back(
-        GridPoints{m_boundary.x.data(), nullptr, m_boundary.support(), &m_staticCells, 0, &m_staticBounds});
+    walls.push_back(GridPoints{m_boundary.x.data(), nullptr, m_boundary.support(), &m_staticCells, 0,
+                               &m_staticBounds, &m_staticClearance});
   if (nKinematic > 0) {
     walls.push_back(GridPoints{m_boundary.x.data() + nStatic, nullptr, m_boundary.support(),
                                &m_kinematicCells, std::uint32_t(nStatic)});
@@ -821,9 +829,11 @@ std::vector<MemoryItem> Simulation::memoryBreakdown() const {
   countVector(held, m_heldNbrs.indices);
   countVector(held, m_heldNbrs.chunkCounts);
   out.push_back(held);
-  MemoryItem cells{"grid: cell ranges (fluid, static, kinematic) and sort order", 0, 0};
+  MemoryItem cells{"grid: cell ranges (fluid, static, kinematic), sort order, walls' clearance", 0, 0};
   for (const auto* v : {&m_order, &m_fluidCells, &m_staticCells, &m_kinematicCells})
     countVector(cells, *v);
+  cells.bytes += m_staticClearance.memoryBytes();
+  cells.used += m_staticClearance.memoryBytes();
   out.push_back(cells);
   // the members of other classes report their capacity only: their spare part is not known here
   out.push_back({"grid: sort keys and row starts", m_grid.memoryBytes(), m_grid.memoryBytes()});

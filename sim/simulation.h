@@ -180,7 +180,8 @@ class Simulation {
   std::vector<std::uint32_t> m_order;
   std::vector<std::uint32_t> m_fluidCells;
   std::vector<std::uint32_t> m_staticCells;
-  PointBounds m_staticBounds;  // bounding box of the static boundary particles (they never move)
+  PointBounds m_staticBounds;       // bounding box of the static boundary particles (they never move)
+  CellClearance m_staticClearance;  // their distance bounds per cell of m_grid
   std::vector<std::uint32_t> m_kinematicCells;
   DfsphSolver m_solver;
   AdaptivityMode m_mode = AdaptivityMode::UniformHigh;
