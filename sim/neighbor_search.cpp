@@ -449,8 +449,6 @@ void NeighborSearch::buildLists(const UniformGrid& grid, const std::vector<Vec3>
     }
     bounds[s] = box;
   }
-  // the starts of an empty row (every cell of a row of the grid empty)
-  const std::vector<std::uint32_t> zeroRow(std::size_t(dims.x()) + 1, 0);
   auto searchChunk = [&](std::size_t chunk) {
     const std::size_t room = roomStart[chunk + 1] - roomStart[chunk];
     std::uint32_t* dst = out.indices.data() + roomStart[chunk];
@@ -543,21 +541,22 @@ void NeighborSearch::buildLists(const UniformGrid& grid, const std::vector<Vec3>
           const std::uint32_t* rowOffsets = ranges.data() + 2 + std::uint32_t(cz * dims.y());
           for (int cy = y0; cy <= y1; ++cy) {
             // Each row of the plane is written as a run and kept by advancing the count when it is within
-            // reach and holds a point in x0..x1 (an empty row reads the zero row): no branch per row, whose
+            // reach and holds a point in x0..x1 (an empty row reads as zeros): no branch per row, whose
             // outcome the predictor could not learn. The whole row x0..x1 is tested: trimming its ends to
             // the cells within reach (by geometry, or by the cells' largest supports) cost more in
             // mispredicted branches than the candidates it saved, with the candidates tested 8 at a time or
             // branch-free (the search of the hand tank at r = 5 mm took 1.7x as long with the trimming).
             // Cells x0..x1 of one row are contiguous in the sorted arrays.
+            // (masks, not conditional expressions: the compiler made branches of those)
             const std::uint32_t rowBase = rowOffsets[cy];
-            const std::uint32_t* start = rowBase != 0 ? ranges.data() + rowBase : zeroRow.data();
-            const std::uint32_t b = start[x0];
-            const std::uint32_t e = start[x1 + 1];
-            const bool keep = dy2[cy] + dzz < hMax2;
+            const std::uint32_t nonEmpty = std::uint32_t(0) - std::uint32_t(rowBase != 0);
+            const std::uint32_t b = ranges.data()[(rowBase + std::uint32_t(x0)) & nonEmpty] & nonEmpty;
+            const std::uint32_t e = ranges.data()[(rowBase + std::uint32_t(x1) + 1) & nonEmpty] & nonEmpty;
+            const std::uint32_t inReach = std::uint32_t(0) - std::uint32_t(dy2[cy] + dzz < hMax2);
+            const std::uint32_t length = (e - b) & inReach;
             runs[nRuns] = Run{b, e};
-            const std::uint32_t length = keep ? e - b : 0;
             candidates += length;
-            nRuns += length != 0;
+            nRuns += std::size_t(length != 0);
           }
         }
         // the candidates of all rows, in row order
