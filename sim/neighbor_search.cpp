@@ -249,6 +249,19 @@ Eigen::Vector3i UniformGrid::cellCoord(const Vec3& p) const {
   return c;
 }
 
+std::vector<GridPoints> wallSources(Real support, const Vec3* staticX, std::size_t nStatic,
+                                    const std::vector<std::uint32_t>& staticCells,
+                                    const PointBounds* staticBounds, const CellClearance* staticClearance,
+                                    const Vec3* kinematicX, std::size_t nKinematic,
+                                    const std::vector<std::uint32_t>& kinematicCells) {
+  std::vector<GridPoints> walls;
+  if (nStatic > 0)
+    walls.push_back(GridPoints{staticX, nullptr, support, &staticCells, 0, staticBounds, staticClearance});
+  if (nKinematic > 0)
+    walls.push_back(GridPoints{kinematicX, nullptr, support, &kinematicCells, std::uint32_t(nStatic)});
+  return walls;
+}
+
 void CellClearance::build(const UniformGrid& grid, const Vec3* x, std::size_t n, Real reach) {
   m_dims = grid.dims();
   m_origin = grid.origin();

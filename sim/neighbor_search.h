@@ -153,6 +153,15 @@ struct GridPoints {
   const CellClearance* clearance = nullptr;
 };
 
+/// The sources of a boundary search: the static walls (sorted once; their bounding box and clearance given
+/// when known, else nullptr) and, after them in the lists' indices, the moving boundary particles; a part
+/// with no points is left out.
+std::vector<GridPoints> wallSources(Real support, const Vec3* staticX, std::size_t nStatic,
+                                    const std::vector<std::uint32_t>& staticCells,
+                                    const PointBounds* staticBounds, const CellClearance* staticClearance,
+                                    const Vec3* kinematicX, std::size_t nKinematic,
+                                    const std::vector<std::uint32_t>& kinematicCells);
+
 /// Whether the neighbour search tests its candidates 8 at a time with AVX2 (chosen at run time from the CPU;
 /// the lists are the same either way). Tests switch it off to compare with the scalar path; switching it on
 /// on a CPU without AVX2 keeps it off. Returns the setting in force.

@@ -498,14 +498,9 @@ void Simulation::searchBoundaryNeighbors() {
     m_grid.sort(m_boundary.x.data() + nStatic, nKinematic, m_order, m_kinematicCells);
     m_boundary.permute(nStatic, m_order);
   }
-  std::vector<GridPoints> walls;
-  if (nStatic > 0)
-    walls.push_back(GridPoints{m_boundary.x.data(), nullptr, m_boundary.support(), &m_staticCells, 0,
-                               &m_staticBounds, &m_staticClearance});
-  if (nKinematic > 0) {
-    walls.push_back(GridPoints{m_boundary.x.data() + nStatic, nullptr, m_boundary.support(),
-                               &m_kinematicCells, std::uint32_t(nStatic)});
-  }
+  const std::vector<GridPoints> walls =
+      wallSources(m_boundary.support(), m_boundary.x.data(), nStatic, m_staticCells, &m_staticBounds,
+                  &m_staticClearance, m_boundary.x.data() + nStatic, nKinematic, m_kinematicCells);
   m_search.build(m_grid, m_fluid.x, m_fluid.H, walls, -1, m_searchMaxH, m_boundaryNbrs);
 }
 

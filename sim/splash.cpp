@@ -120,14 +120,9 @@ void SplashGenerator::searchNeighbors(const ParticleSet& p, const BoundarySet& b
     for (std::size_t s = r.begin(); s < r.end(); ++s)
       m_kinematicX[s] = boundary.x[nStatic + m_kinematicOrder[s]];
   });
-  std::vector<GridPoints> walls;
-  if (nStatic > 0)
-    walls.push_back(
-        GridPoints{m_staticX.data(), nullptr, boundary.support(), &m_staticCells, 0, &m_staticBounds});
-  if (nKinematic > 0) {
-    walls.push_back(GridPoints{m_kinematicX.data(), nullptr, boundary.support(), &m_kinematicCells,
-                               std::uint32_t(nStatic)});
-  }
+  const std::vector<GridPoints> walls =
+      wallSources(boundary.support(), m_staticX.data(), nStatic, m_staticCells, &m_staticBounds, nullptr,
+                  m_kinematicX.data(), nKinematic, m_kinematicCells);
   m_search.build(m_grid, m_sorted.x, m_sorted.H, walls, -1, maxH, m_boundaryNbrs);
   // back to the caller's boundary indices, which detectSurface and the volumes index
   parallelFor(Range(0, m_boundaryNbrs.indices.size(), 4 * kGrain), [&](const Range& r) {
@@ -142,10 +137,8 @@ const SplashParticles& SplashGenerator::generate(const ParticleSet& p, const Bou
                                                  const SimParams& params, const Aabb& domain,
                                                  std::uint64_t frame) {
   m_out.clear();
-  const std::size_t n = p.size();
-  if (!params.splashEnabled || params.splashCount <= 0 || n == 0)
+  if (off(params, p.size()))
     return m_out;
-
   searchNeighbors(p, boundary, domain);
   return spawn(p, boundary, params, frame, m_fluidNbrs, m_boundaryNbrs);
 }
@@ -254,9 +247,9 @@ const SplashParticles& SplashGenerator::generate(const Simulation& simulation, s
     return generate(p, simulation.boundary(), params, simulation.scene().domain, frame);
   // the simulation's lists are those of its current state (Simulation::prepareNeighbors): no search here
   m_out.clear();
-  const std::size_t n = p.size();
-  if (!params.splashEnabled || params.splashCount <= 0 || n == 0)
+  if (off(params, p.size()))
     return m_out;
+  const std::size_t n = p.size();
   m_order.resize(n);
   std::iota(m_order.begin(), m_order.end(), 0u);
   copyInOrder(p);

@@ -63,6 +63,10 @@ class SplashGenerator {
   void searchNeighbors(const ParticleSet& p, const BoundarySet& boundary, const Aabb& domain);
   /// m_sorted's x, m, H, rho: p's in m_order; flags cleared
   void copyInOrder(const ParticleSet& p);
+  /// no splash: switched off, no particle to spawn per spawner, or no fluid
+  static bool off(const SimParams& params, std::size_t particles) {
+    return !params.splashEnabled || params.splashCount <= 0 || particles == 0;
+  }
   /// surface detection and the splash particles, on m_sorted (p in m_order) and lists over it
   const SplashParticles& spawn(const ParticleSet& p, const BoundarySet& boundary, const SimParams& params,
                                std::uint64_t frame, const NeighborList& fluidNbrs,
