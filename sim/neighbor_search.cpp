@@ -268,9 +268,13 @@ void CellClearance::build(const UniformGrid& grid, const Vec3* x, std::size_t n,
   const double cell = double(grid.cellSize());
   m_invCellSize = Real(1) / grid.cellSize();
   m_unit = Real(cell / 32.0);
-  const int k = std::clamp(int(std::ceil(double(reach) / cell)), 1, 7);
-  // every point is at least k cells from a cell it does not look at (k cells on every side of its own)
-  m_bound.assign(grid.cellCount(), std::uint8_t(32 * k));
+  // k whole cells on every side of a point's own cell, more than the reach (so that a reach of whole cells,
+  // the uniform modes' one cell, still finds cells beyond it)
+  const int k = std::clamp(int(std::floor(double(reach) / cell)) + 1, 1, 7);
+  // Every point is at least k cells from a cell it does not look at. Each bound is one unit short of the
+  // distance: a query's cell is found in float arithmetic, and near a face it may be the neighbour of the one
+  // it lies in by a few ulps (covered up to 10^5 cells from the grid's origin).
+  m_bound.assign(grid.cellCount(), std::uint8_t(32 * k - 1));
   for (std::size_t i = 0; i < n; ++i) {
     const Eigen::Vector3i c = grid.cellCoord(x[i]);
     const Eigen::Vector3d p = x[i].cast<double>();
@@ -282,7 +286,7 @@ void CellClearance::build(const UniformGrid& grid, const Vec3* x, std::size_t n,
           const Eigen::Vector3d hi = lo + Eigen::Vector3d::Constant(cell);
           const double d = (p - p.cwiseMax(lo).cwiseMin(hi)).norm();
           std::uint8_t& b = m_bound[grid.linear(cx, cy, cz)];
-          b = std::uint8_t(std::min<double>(b, std::floor(d * 32.0 / cell)));
+          b = std::uint8_t(std::min<double>(b, std::max(0.0, std::floor(d * 32.0 / cell) - 1.0)));
         }
       }
     }

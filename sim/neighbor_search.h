@@ -106,12 +106,14 @@ PointBounds pointBounds(const Vec3* x, std::size_t n);
 /// of points that never moves (the static walls), in 1/32 of a cell, one byte a cell: the search then skips
 /// the whole set for a query point that it cannot reach (in the hand tank three fluid particles in four have
 /// no wall within their support, and each would otherwise visit a dozen rows of the walls' grid to find
-/// none). The bound is exact to a cell's 1/32 and looks `reach` far; beyond, it is the reach itself, so the
-/// search skips the set only where its own support is shorter than the bound, and the lists are the same.
+/// none). Within `reach` the bound is the distance from the cell's box to the nearest point less at most a
+/// cell's 1/16 (a unit of rounding, a unit of margin); beyond, it is as far as the whole cells looked at
+/// (more than the reach). The search skips the set only where its own support is shorter than the bound, so
+/// the lists are the same.
 class CellClearance {
  public:
-  /// the bounds for the points x[0..n) in `grid`, each point looked at as far as `reach` [m] (capped at 7
-  /// cells)
+  /// the bounds for the points x[0..n) in `grid`, each point looked at as far as `reach` [m] and beyond to
+  /// the next whole cell (at most 7 cells)
   void build(const UniformGrid& grid, const Vec3* x, std::size_t n, Real reach);
   /// a lower bound [m] of the distance from `p` to every point of the set (0 outside the grid, or before
   /// build)

@@ -323,13 +323,13 @@ TEST(NeighborSearchTest, WallClearanceBoundsTheDistanceAndLeavesTheListsAsTheyWe
   const Real h = 0.04f;
   UniformGrid grid;
   grid.setup(box, h);
+  const Real margin = Real(1e-4) * grid.cellSize();  // the search's
   // a floor and a side wall: thin random layers
   Cloud wall = randomCloud(3000, h, 0.0, 21, Aabb(Vec3d(0, 0, 0), Vec3d(0.6, 0.01, 0.4)));
   const Cloud side = randomCloud(1500, h, 0.0, 22, Aabb(Vec3d(0, 0, 0), Vec3d(0.01, 0.5, 0.4)));
+  const std::size_t nFloor = wall.x.size();
   wall.x.insert(wall.x.end(), side.x.begin(), side.x.end());
   wall.H.insert(wall.H.end(), side.H.begin(), side.H.end());
-  // water with fine and coarse (3 h) particles, some of them right at the walls
-  Cloud c = randomCloud(4000, h, 0.3, 23, box);
   std::vector<std::uint32_t> order, cells, wallCells;
   auto sortCloud = [&](Cloud& cloud, std::vector<std::uint32_t>& cellStarts) {
     grid.sort(cloud.x.data(), cloud.x.size(), order, cellStarts);
@@ -340,51 +340,72 @@ TEST(NeighborSearchTest, WallClearanceBoundsTheDistanceAndLeavesTheListsAsTheyWe
     }
     cloud = s;
   };
-  sortCloud(c, cells);
+  // the floor alone, for the check below that the search consults the clearance
+  std::vector<Vec3> floorOnly(wall.x.begin(), wall.x.begin() + std::ptrdiff_t(nFloor));
   sortCloud(wall, wallCells);
-  const Real maxH = 3 * h;
-  const Real reach = Real(0.5) * (maxH + h);
-  CellClearance clearance;
-  clearance.build(grid, wall.x.data(), wall.x.size(), reach);
-
-  // the bound never exceeds the distance to the nearest wall point, and within the reach it is short of it
-  // by no more than a cell's diagonal (the bound is the distance from the nearest point's cell box)
-  std::size_t skipped = 0;
-  for (std::size_t i = 0; i < c.x.size(); ++i) {
-    double nearest = 1e9;
-    for (const Vec3& w : wall.x)
-      nearest = std::min(nearest, double((c.x[i] - w).norm()));
-    const double bound = clearance.lowerBound(c.x[i]);
-    ASSERT_LE(bound, nearest + 1e-6) << "particle " << i;
-    if (nearest < double(reach)) {
-      EXPECT_GE(bound, nearest - std::sqrt(3.0) * double(h) - double(h) / 32 - 1e-6) << "particle " << i;
-    }
-    skipped += bound >= double(pairSupport(c.H[i], h));
-  }
-  // most of the water is out of the walls' reach (the test would be idle otherwise)
-  EXPECT_GT(skipped, c.x.size() / 2);
-  // outside the grid: no bound
-  EXPECT_EQ(clearance.lowerBound(Vec3(5, 5, 5)), Real(0));
-
-  // the same lists, in the same order, with the clearance and without (and both as brute force finds them)
   const PointBounds wallBounds = pointBounds(wall.x.data(), wall.x.size());
-  NeighborSearch search;
-  NeighborList with, without;
-  search.build(grid, c.x, c.H,
-               {GridPoints{wall.x.data(), nullptr, h, &wallCells, 0, &wallBounds, &clearance}}, -1, maxH,
-               with);
-  search.build(grid, c.x, c.H, {GridPoints{wall.x.data(), nullptr, h, &wallCells, 0, &wallBounds}}, -1, maxH,
-               without);
-  EXPECT_EQ(with.offsets, without.offsets);
-  EXPECT_EQ(with.indices, without.indices);
-  for (std::size_t i = 0; i < c.x.size(); ++i) {
-    std::set<std::uint32_t> expected;
-    const Real hij = pairSupport(c.H[i], h);
-    for (std::size_t j = 0; j < wall.x.size(); ++j) {
-      if ((c.x[i] - wall.x[j]).squaredNorm() < hij * hij)
-        expected.insert(std::uint32_t(j));
+
+  // water with fine and coarse (3 h) particles, some of them right at the walls; and water of one size, whose
+  // pair support with the walls is exactly one cell (the uniform modes)
+  for (const double coarseShare : {0.3, 0.0}) {
+    Cloud c = randomCloud(4000, h, coarseShare, 23, box);
+    sortCloud(c, cells);
+    const Real maxH = *std::max_element(c.H.begin(), c.H.end());
+    const Real reach = Real(0.5) * (maxH + h);
+    CellClearance clearance;
+    clearance.build(grid, wall.x.data(), wall.x.size(), reach);
+
+    // the bound never exceeds the distance to the nearest wall point, and within the reach it is short of it
+    // by no more than a cell's diagonal and two units (the bound is the distance from the cell's box, less a
+    // unit of margin, rounded down)
+    std::size_t skipped = 0;
+    for (std::size_t i = 0; i < c.x.size(); ++i) {
+      double nearest = 1e9;
+      for (const Vec3& w : wall.x)
+        nearest = std::min(nearest, double((c.x[i] - w).norm()));
+      const double bound = clearance.lowerBound(c.x[i]);
+      ASSERT_LE(bound, nearest + 1e-6) << "particle " << i;
+      if (nearest < double(reach)) {
+        EXPECT_GE(bound, nearest - std::sqrt(3.0) * double(h) - 2 * double(h) / 32 - 1e-6)
+            << "particle " << i;
+      }
+      // as the search skips: the pair support with the walls and the search's margin
+      skipped += bound >= double(pairSupport(c.H[i], h) + margin);
     }
-    ASSERT_EQ(listOf(with, i), expected) << "particle " << i;
+    // most of the water is out of the walls' reach (the test would be idle otherwise)
+    EXPECT_GT(skipped, c.x.size() / 2) << "coarse share " << coarseShare;
+    // outside the grid: no bound
+    EXPECT_EQ(clearance.lowerBound(Vec3(5, 5, 5)), Real(0));
+
+    // the same lists, in the same order, with the clearance and without (and both as brute force finds them)
+    NeighborSearch search;
+    NeighborList with, without;
+    search.build(grid, c.x, c.H,
+                 {GridPoints{wall.x.data(), nullptr, h, &wallCells, 0, &wallBounds, &clearance}}, -1, maxH,
+                 with);
+    search.build(grid, c.x, c.H, {GridPoints{wall.x.data(), nullptr, h, &wallCells, 0, &wallBounds}}, -1,
+                 maxH, without);
+    EXPECT_EQ(with.offsets, without.offsets);
+    EXPECT_EQ(with.indices, without.indices);
+    for (std::size_t i = 0; i < c.x.size(); ++i) {
+      std::set<std::uint32_t> expected;
+      const Real hij = pairSupport(c.H[i], h);
+      for (std::size_t j = 0; j < wall.x.size(); ++j) {
+        if ((c.x[i] - wall.x[j]).squaredNorm() < hij * hij)
+          expected.insert(std::uint32_t(j));
+      }
+      ASSERT_EQ(listOf(with, i), expected) << "particle " << i;
+    }
+    EXPECT_GT(with.indices.size(), 1000u);
+
+    // the search does consult it: a clearance of the floor alone, given for floor and side wall, hides the
+    // side wall from the water above the floor
+    CellClearance floorClearance;
+    floorClearance.build(grid, floorOnly.data(), floorOnly.size(), reach);
+    NeighborList blind;
+    search.build(grid, c.x, c.H,
+                 {GridPoints{wall.x.data(), nullptr, h, &wallCells, 0, &wallBounds, &floorClearance}}, -1,
+                 maxH, blind);
+    EXPECT_LT(blind.indices.size(), with.indices.size());
   }
-  EXPECT_GT(with.indices.size(), 1000u);
 }
