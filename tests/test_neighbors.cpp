@@ -31,6 +31,18 @@ Cloud randomCloud(std::size_t n, Real hFine, double coarseShare, unsigned seed, 
   return c;
 }
 
+/// sorts the cloud by cell of `grid` as the simulation does, filling `cells` with its cell ranges
+void sortByCell(UniformGrid& grid, Cloud& c, std::vector<std::uint32_t>& cells) {
+  std::vector<std::uint32_t> order;
+  grid.sort(c.x.data(), c.x.size(), order, cells);
+  Cloud s = c;
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    s.x[k] = c.x[order[k]];
+    s.H[k] = c.H[order[k]];
+  }
+  c = s;
+}
+
 std::set<std::uint32_t> listOf(const NeighborList& l, std::size_t i) {
   return std::set<std::uint32_t>(l.indices.begin() + l.offsets[i], l.indices.begin() + l.offsets[i + 1]);
 }
@@ -85,19 +97,10 @@ TEST(NeighborSearchTest, FindsBoundaryNeighborsAcrossTwoSources) {
   Cloud wallB = randomCloud(500, h, 0.0, 5, box);
   UniformGrid grid;
   grid.setup(box, h);
-  std::vector<std::uint32_t> order, cellsA, cellsB, cellsF;
-  auto sortCloud = [&](Cloud& c, std::vector<std::uint32_t>& cells) {
-    grid.sort(c.x.data(), c.x.size(), order, cells);
-    Cloud s = c;
-    for (std::size_t k = 0; k < order.size(); ++k) {
-      s.x[k] = c.x[order[k]];
-      s.H[k] = c.H[order[k]];
-    }
-    c = s;
-  };
-  sortCloud(fluid, cellsF);
-  sortCloud(wallA, cellsA);
-  sortCloud(wallB, cellsB);
+  std::vector<std::uint32_t> cellsA, cellsB, cellsF;
+  sortByCell(grid, fluid, cellsF);
+  sortByCell(grid, wallA, cellsA);
+  sortByCell(grid, wallB, cellsB);
   // walls concatenated: B's indices come after A's
   GridPoints a{wallA.x.data(), nullptr, h, &cellsA, 0};
   GridPoints b{wallB.x.data(), nullptr, h, &cellsB, std::uint32_t(wallA.x.size())};
@@ -281,18 +284,9 @@ TEST(NeighborSearchTest, Avx2CandidateTestGivesTheScalarLists) {
   Cloud wall = randomCloud(1500, h, 0.0, 31, box);
   UniformGrid grid;
   grid.setup(box, h);
-  std::vector<std::uint32_t> order, cells, wallCells;
-  auto sortCloud = [&](Cloud& cloud, std::vector<std::uint32_t>& cellStarts) {
-    grid.sort(cloud.x.data(), cloud.x.size(), order, cellStarts);
-    Cloud s = cloud;
-    for (std::size_t k = 0; k < order.size(); ++k) {
-      s.x[k] = cloud.x[order[k]];
-      s.H[k] = cloud.H[order[k]];
-    }
-    cloud = s;
-  };
-  sortCloud(c, cells);
-  sortCloud(wall, wallCells);
+  std::vector<std::uint32_t> cells, wallCells;
+  sortByCell(grid, c, cells);
+  sortByCell(grid, wall, wallCells);
   const Real maxH = *std::max_element(c.H.begin(), c.H.end());
   const PointBounds wallBounds = pointBounds(wall.x.data(), wall.x.size());
   auto buildAll = [&](bool simd) {
@@ -330,26 +324,17 @@ TEST(NeighborSearchTest, WallClearanceBoundsTheDistanceAndLeavesTheListsAsTheyWe
   const std::size_t nFloor = wall.x.size();
   wall.x.insert(wall.x.end(), side.x.begin(), side.x.end());
   wall.H.insert(wall.H.end(), side.H.begin(), side.H.end());
-  std::vector<std::uint32_t> order, cells, wallCells;
-  auto sortCloud = [&](Cloud& cloud, std::vector<std::uint32_t>& cellStarts) {
-    grid.sort(cloud.x.data(), cloud.x.size(), order, cellStarts);
-    Cloud s = cloud;
-    for (std::size_t k = 0; k < order.size(); ++k) {
-      s.x[k] = cloud.x[order[k]];
-      s.H[k] = cloud.H[order[k]];
-    }
-    cloud = s;
-  };
+  std::vector<std::uint32_t> cells, wallCells;
   // the floor alone, for the check below that the search consults the clearance
   std::vector<Vec3> floorOnly(wall.x.begin(), wall.x.begin() + std::ptrdiff_t(nFloor));
-  sortCloud(wall, wallCells);
+  sortByCell(grid, wall, wallCells);
   const PointBounds wallBounds = pointBounds(wall.x.data(), wall.x.size());
 
   // water with fine and coarse (3 h) particles, some of them right at the walls; and water of one size, whose
   // pair support with the walls is exactly one cell (the uniform modes)
   for (const double coarseShare : {0.3, 0.0}) {
     Cloud c = randomCloud(4000, h, coarseShare, 23, box);
-    sortCloud(c, cells);
+    sortByCell(grid, c, cells);
     const Real maxH = *std::max_element(c.H.begin(), c.H.end());
     const Real reach = Real(0.5) * (maxH + h);
     CellClearance clearance;
