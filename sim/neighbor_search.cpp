@@ -24,6 +24,9 @@ namespace {
 // query points per parallel task; fixed so lists are deterministic, small enough that two threads share a
 // few thousand particles evenly (fine and coarse particles cost very differently)
 constexpr std::size_t kChunk = 128;
+// chunks per task in the loops of a few operations a point (offsets, prefix sums): at 2 threads a parallel
+// call costs a few microseconds of hand-over, more than such a loop over a few thousand points takes
+constexpr std::size_t kLightChunks = 64;
 // UniformGrid::sort: below this many points a serial counting sort, above it TBB's parallel sort
 constexpr std::size_t kRadixSortBelow = 16384;
 
@@ -667,14 +670,15 @@ void NeighborSearch::buildLists(const UniformGrid& grid, const std::vector<Vec3>
     fitted.assign(out.indices.begin(), out.indices.end());
     out.indices.swap(fitted);
   }
-  parallelFor(tbb::blocked_range<std::size_t>(0, nChunks, 1), [&](const tbb::blocked_range<std::size_t>& cr) {
-    for (std::size_t chunk = cr.begin(); chunk < cr.end(); ++chunk) {
-      const std::uint32_t base = std::uint32_t(listStart[chunk]);
-      const std::size_t i1 = std::min(n, (chunk + 1) * kChunk);
-      for (std::size_t i = chunk * kChunk; i < i1; ++i)
-        out.offsets[i + 1] += base;
-    }
-  });
+  parallelFor(tbb::blocked_range<std::size_t>(0, nChunks, kLightChunks),
+              [&](const tbb::blocked_range<std::size_t>& cr) {
+                for (std::size_t chunk = cr.begin(); chunk < cr.end(); ++chunk) {
+                  const std::uint32_t base = std::uint32_t(listStart[chunk]);
+                  const std::size_t i1 = std::min(n, (chunk + 1) * kChunk);
+                  for (std::size_t i = chunk * kChunk; i < i1; ++i)
+                    out.offsets[i + 1] += base;
+                }
+              });
 }
 
 void NeighborSearch::buildSymmetric(const UniformGrid& grid, const std::vector<Vec3>& x,
@@ -731,7 +735,7 @@ void NeighborSearch::buildSymmetric(const UniformGrid& grid, const std::vector<V
   // each point's received pairs, and each block's first slot among them
   m_received.resize(n);
   std::uint32_t* received = m_received.data();
-  parallelFor(Range(0, n, 1024), [&](const Range& r) {
+  parallelFor(Range(0, n, kLightChunks * kChunk), [&](const Range& r) {
     for (std::size_t i = r.begin(); i < r.end(); ++i) {
       std::uint32_t sum = 0;
       for (std::size_t b = 0; b < nBlocks; ++b) {
@@ -744,7 +748,7 @@ void NeighborSearch::buildSymmetric(const UniformGrid& grid, const std::vector<V
   });
   // i's list starts after the lists of the points before it: a prefix sum, per chunk and over chunks
   m_chunkPairs.assign(nChunks + 1, 0);
-  parallelFor(Range(0, nChunks, 1), [&](const Range& cr) {
+  parallelFor(Range(0, nChunks, kLightChunks), [&](const Range& cr) {
     for (std::size_t chunk = cr.begin(); chunk < cr.end(); ++chunk) {
       std::size_t sum = 0;
       for (std::size_t i = chunk * kChunk; i < std::min(n, (chunk + 1) * kChunk); ++i)
@@ -757,7 +761,7 @@ void NeighborSearch::buildSymmetric(const UniformGrid& grid, const std::vector<V
   const std::size_t total = ownOff[n] + m_chunkPairs[nChunks];
   m_lastTotal = total;
   out.offsets.resize(n + 1);
-  parallelFor(Range(0, nChunks, 1), [&](const Range& cr) {
+  parallelFor(Range(0, nChunks, kLightChunks), [&](const Range& cr) {
     for (std::size_t chunk = cr.begin(); chunk < cr.end(); ++chunk) {
       std::size_t before = m_chunkPairs[chunk];
       for (std::size_t i = chunk * kChunk; i < std::min(n, (chunk + 1) * kChunk); ++i) {

@@ -101,6 +101,8 @@ class ParticleSet {
   /// reorders all fields so that new index k holds old particle order[k]; `order` is a permutation, or the
   /// indices of the particles to keep (the others are dropped)
   void permute(const std::vector<std::uint32_t>& order);
+  /// permute() of fewer than this many particles goes column by column (permuteByColumns)
+  static constexpr std::size_t kColumnTasksBelow = 16384;
   /// keeps the particles `keep` (strictly ascending indices) in their order and drops the others: in place,
   /// moving only the particles after the first dropped one, each field on its own task (the merges of an
   /// adaptation step drop a few particles of thousands: permute() gathered and copied back every field)
@@ -124,6 +126,9 @@ class ParticleSet {
   void forEachField(F&& f);
   template <class F>
   void forEachAdaptivityField(F&& f);
+  // permute() of a few thousand particles: every column (a 4-byte field, or a coordinate of a vector field)
+  // on its own task
+  void permuteByColumns(const std::vector<std::uint32_t>& order);
   std::uint32_t m_nextId = 0;
   bool m_adaptivityFields = true;
   // permute()'s scratch: one float a particle for every field (vector fields go a coordinate at a time)

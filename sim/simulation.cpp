@@ -511,7 +511,7 @@ void Simulation::integrateAndCheck(Real dt) {
   const Vec3 hi = m_scene.domain.max().cast<Real>();
   // advance and find the first bad particle (lowest index, so the report is deterministic)
   const std::size_t bad = parallelReduce(
-      tbb::blocked_range<std::size_t>(0, n, 4096), n,
+      tbb::blocked_range<std::size_t>(0, n, 1024), n,
       [&](const tbb::blocked_range<std::size_t>& r, std::size_t first) {
         for (std::size_t i = r.begin(); i < r.end(); ++i) {
           m_fluid.x[i] += dt * m_fluid.v[i];

@@ -133,6 +133,49 @@ TEST(Memory, RetainDropsParticlesInPlaceAsPermuteDoes) {
   EXPECT_EQ(a.mOpt.size(), 0u);
 }
 
+TEST(Memory, PermuteGathersEveryFieldBelowAndAboveTheColumnTasks) {
+  // a few thousand particles are reordered column by column, each column a task; more, field by field with
+  // the particles split among the threads: both give every field of every kept particle, in the new order
+  for (const std::size_t n : {std::size_t(3001), sim::ParticleSet::kColumnTasksBelow + 999}) {
+    sim::ParticleSet p;
+    p.setAdaptivityFields(true);
+    for (std::size_t k = 0; k < n; ++k) {
+      const float f = float(k);
+      const std::size_t i = p.add(sim::Vec3(f, -f, 0.5f * f), sim::Vec3(2 * f, 0, -f), f, f + 1, 1000);
+      p.a[i] = sim::Vec3(0, 3 * f, 1);
+      p.kappa[i] = f + 2;
+      p.flags[i] = std::uint32_t(k * 7);
+      p.mOpt[i] = f + 3;
+      p.heavySteps[i] = std::uint32_t(k + 4);
+      p.splitAge[i] = std::uint32_t(k + 5);
+    }
+    // reversed, every fifth dropped
+    std::vector<std::uint32_t> order;
+    for (std::size_t k = n; k-- > 0;) {
+      if (k % 5 != 2)
+        order.push_back(std::uint32_t(k));
+    }
+    const sim::ParticleSet before = p;
+    p.permute(order);
+    ASSERT_EQ(p.size(), order.size()) << n;
+    EXPECT_EQ(p.splitAge.size(), order.size()) << n;
+    for (std::size_t k = 0; k < order.size(); ++k) {
+      const std::uint32_t o = order[k];
+      ASSERT_EQ(p.x[k], before.x[o]) << n << " " << k;
+      ASSERT_EQ(p.v[k], before.v[o]) << n << " " << k;
+      ASSERT_EQ(p.a[k], before.a[o]) << n << " " << k;
+      ASSERT_EQ(p.m[k], before.m[o]) << n << " " << k;
+      ASSERT_EQ(p.H[k], before.H[o]) << n << " " << k;
+      ASSERT_EQ(p.kappa[k], before.kappa[o]) << n << " " << k;
+      ASSERT_EQ(p.id[k], before.id[o]) << n << " " << k;
+      ASSERT_EQ(p.flags[k], before.flags[o]) << n << " " << k;
+      ASSERT_EQ(p.mOpt[k], before.mOpt[o]) << n << " " << k;
+      ASSERT_EQ(p.heavySteps[k], before.heavySteps[o]) << n << " " << k;
+      ASSERT_EQ(p.splitAge[k], before.splitAge[o]) << n << " " << k;
+    }
+  }
+}
+
 TEST(Memory, StaticBoundaryParticlesHoldNoVelocityNorLocalPosition) {
   sim::Simulation sim(withPaddle(smallDamBreak(sim::AdaptivityMode::UniformHigh)));
   sim.step();
