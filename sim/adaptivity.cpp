@@ -27,6 +27,13 @@ double uniform01(std::uint64_t& state) {
 
 /// Candidate k of a split: the identity for k = 0 (the unrotated template), else a uniformly random rotation
 /// (Shoemake 1992) drawn from the seed, the parent's id and the step, so runs are reproducible.
+// orientation refinement (planSplit): the first try's angle [rad], its shrink after a try that does not
+// improve, and where the tries' axes start in the candidates' hash stream: past the 64 candidates at most
+// (the hash takes the low 8 bits of the index, so tries 0..63 are indices 64..127)
+constexpr double kRefineAngle = 0.8;
+constexpr double kRefineShrink = 0.7;
+constexpr int kRefineStream = 64;
+
 Quatd candidateRotation(std::uint64_t seed, std::uint32_t id, std::uint64_t step, int k) {
   if (k == 0)
     return Quatd::Identity();
@@ -60,10 +67,10 @@ AdaptivityStats& AdaptivityStats::operator+=(const AdaptivityStats& o) {
   return *this;
 }
 
-std::vector<Vec3> Adaptivity::childPositions(const AdaptContext& ctx, std::size_t o, int n, int candidate) {
+std::vector<Vec3> Adaptivity::childPositions(const AdaptContext& ctx, std::size_t o, int n,
+                                             const Quatd& rot) {
   const ParticleSet& p = ctx.fluid;
   const double radius = ctx.params.particleRadius * std::cbrt(double(p.m[o]) / double(ctx.mFine));
-  const Quatd rot = candidateRotation(ctx.params.seed, p.id[o], ctx.step, candidate);
   const Vec3d centre = p.x[o].cast<double>();
   std::vector<Vec3> x;
   x.reserve(std::size_t(n));
@@ -187,7 +194,8 @@ void Adaptivity::planSplit(const AdaptContext& ctx, SplitPlan& plan) const {
   plan.chosen = -1;
   plan.errorUnrotated = -1.0;
   for (int k = 0; k < candidates; ++k) {
-    const std::vector<Vec3> children = childPositions(ctx, o, plan.n, k);
+    const Quatd rot = candidateRotation(ctx.params.seed, p.id[o], ctx.step, k);
+    const std::vector<Vec3> children = childPositions(ctx, o, plan.n, rot);
     if (!valid(children))
       continue;
     const double e = splitError(ctx, o, children);
@@ -196,7 +204,32 @@ void Adaptivity::planSplit(const AdaptContext& ctx, SplitPlan& plan) const {
     if (plan.chosen < 0 || e < plan.errorChosen) {
       plan.chosen = k;
       plan.errorChosen = e;
+      plan.rotation = rot;
     }
+  }
+  // Refinement around the best candidate: each try turns the chosen rotation by `angle` about a random axis
+  // (drawn from the same hash as the candidates, so runs repeat) and is kept when it lowers the error; a try
+  // that does not shrinks the angle. With 8 candidates, 8 tries raise the propeller's orientation gain from
+  // 12 % to 17 % (docs/method.md); more random candidates alone gave 14.5 % at 16 and 16.7 % at 32.
+  if (plan.chosen < 0)
+    return;
+  double angle = kRefineAngle;
+  for (int r = 0; r < ctx.params.orientationRefinement; ++r) {
+    const Vec3d axis =
+        candidateRotation(ctx.params.seed, p.id[o], ctx.step, kRefineStream + r) * Vec3d::UnitZ();
+    const Quatd rot = (plan.rotation * Quatd(Eigen::AngleAxisd(angle, axis))).normalized();
+    const std::vector<Vec3> children = childPositions(ctx, o, plan.n, rot);
+    bool better = false;
+    if (valid(children)) {
+      const double e = splitError(ctx, o, children);
+      if (e < plan.errorChosen) {
+        plan.errorChosen = e;
+        plan.rotation = rot;
+        better = true;
+      }
+    }
+    if (!better)
+      angle *= kRefineShrink;
   }
 }
 
@@ -333,7 +366,7 @@ AdaptivityStats Adaptivity::adapt(const AdaptContext& ctx, bool ignoreDelay) {
       continue;
     }
     const std::size_t o = plan.parent;
-    const std::vector<Vec3> children = childPositions(ctx, o, plan.n, plan.chosen);
+    const std::vector<Vec3> children = childPositions(ctx, o, plan.n, plan.rotation);
     const double mParent = p.m[o];
     const Real mChild = Real(mParent / plan.n);
     for (int s = 0; s < plan.n; ++s) {

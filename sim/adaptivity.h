@@ -108,12 +108,13 @@ class Adaptivity {
   struct SplitPlan {
     std::size_t parent = 0;
     int n = 0;
-    int chosen = -1;  // candidate index, -1 when every candidate puts a child in a wall
+    int chosen = -1;                     // candidate index, -1 when every candidate puts a child in a wall
+    Quatd rotation = Quatd::Identity();  // the chosen rotation (refined around the chosen candidate's)
     double errorChosen = 0.0;
     double errorUnrotated = -1.0;  // -1 when the unrotated template is not valid
   };
   void planSplit(const AdaptContext& ctx, SplitPlan& plan) const;
-  static std::vector<Vec3> childPositions(const AdaptContext& ctx, std::size_t o, int n, int candidate);
+  static std::vector<Vec3> childPositions(const AdaptContext& ctx, std::size_t o, int n, const Quatd& rot);
   /// moves up to `amount` of the donor's mass and momentum to its light neighbours; with `all` the donor is
   /// removed once all its mass is given. True for a completed merge (all) or any share (!all).
   bool transferMass(const AdaptContext& ctx, std::size_t donor, double amount, bool all);

@@ -86,6 +86,9 @@ ParamTable::ParamTable() : ParamTableOf<SimParams>("parameter", &ParamTable::val
       &P::splitMaxChildren, 27);
   add("orientation_candidates", "adaptivity", "-", 1, 64, live,
       "K: template rotations tried per split (the unrotated one included)", &P::orientationCandidates, 8);
+  add("orientation_refinement", "adaptivity", "-", 0, 64, live,
+      "tries turning the best of the K rotations about a random axis, kept when they lower the split error",
+      &P::orientationRefinement, 8);
   add("merge_below", "adaptivity", "-", 0.0, 1.0, live, "m / m_opt below which a particle is merged",
       &P::mergeBelow, 0.51);
   add("light_below", "adaptivity", "-", 0.0, 1.0, live, "m / m_opt below which a particle may receive mass",

@@ -59,6 +59,7 @@ struct SimParams {
   int splitDelay;
   int splitMaxChildren;
   int orientationCandidates;
+  int orientationRefinement;
   double mergeBelow;
   double lightBelow;
   double mergeReceiversBelow;

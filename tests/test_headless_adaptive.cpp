@@ -71,25 +71,26 @@ TEST(HeadlessAdaptiveTest, StatsReportTheAdaptivity) {
 TEST(HeadlessAdaptiveTest, SplitErrorReductionIsTheOrientationChoice) {
   // A column collapsing in the middle of a wide tank splits away from the walls, where the unrotated template
   // is a candidate too. The reported split_error_reduction is what the orientation choice gains: above 0.1
-  // with the default 8 candidates (measured 0.26 over 7 splits), exactly 0 with the unrotated template alone.
+  // with the default 8 candidates and 8 refining tries, exactly 0 with the unrotated template alone (one
+  // candidate, no refinement).
   // (The old check, a figure in [0, 1), held by construction: the unrotated template is always a candidate.)
   // Splits are few here (most heavy particles sit by the floor): the column of 0.15 m a side split 5 times
   // before the divergence solve's volume criterion and none after, so the column is 0.19 m a side.
   const fs::path dir = fs::temp_directory_path() / ("fp_headless_column_" + std::to_string(getpid()));
   fs::create_directories(dir);
-  auto writeScene = [&](int candidates) {
+  auto writeScene = [&](int candidates, int refinement) {
     const fs::path path = dir / ("column_" + std::to_string(candidates) + ".json");
     std::ofstream(path)
         << R"({"name": "column", "domain": {"min": [-0.3, -0.1, -0.3], "max": [0.3, 0.4, 0.3]},
       "parameters": {"particle_radius": 0.01, "split_delay": 0, "orientation_candidates": )"
-        << candidates << R"(},
+        << candidates << R"(, "orientation_refinement": )" << refinement << R"(},
       "fluid": [{"min": [-0.095, 0.001, -0.095], "max": [0.095, 0.151, 0.095]}],
       "colliders": [{"name": "tank", "shape": "box", "container": true, "half_extents": [0.25, 0.15, 0.25],
                      "position": [0.0, 0.15, 0.0]}]})";
     return path.string();
   };
-  const nlohmann::json chosen = runWithStats("fluidplaying", writeScene(8));
-  const nlohmann::json straight = runWithStats("fluidplaying", writeScene(1));
+  const nlohmann::json chosen = runWithStats("fluidplaying", writeScene(8, 8));
+  const nlohmann::json straight = runWithStats("fluidplaying", writeScene(1, 0));
   fs::remove_all(dir);
   ASSERT_TRUE(chosen.is_object());
   ASSERT_TRUE(straight.is_object());
