@@ -343,7 +343,8 @@ AdaptivityStats Adaptivity::adapt(const AdaptContext& ctx, bool ignoreDelay) {
       ++stats.merges;
   }
 
-  // split 1:n, orientations chosen in parallel on the state before any split of this step
+  // split 1:n, orientations chosen in parallel on the state before any split of this step (one plan a task: a
+  // step has a few plans of tens of microseconds each)
   m_plans.clear();
   for (std::size_t i = 0; i < n; ++i) {
     if (m_locked[i] || ratio(i) < Real(params.splitAbove))
@@ -355,7 +356,7 @@ AdaptivityStats Adaptivity::adapt(const AdaptContext& ctx, bool ignoreDelay) {
     plan.n = childCount(ratio(i), params);
     m_plans.push_back(plan);
   }
-  parallelFor(tbb::blocked_range<std::size_t>(0, m_plans.size(), 4),
+  parallelFor(tbb::blocked_range<std::size_t>(0, m_plans.size(), 1),
               [&](const tbb::blocked_range<std::size_t>& r) {
                 for (std::size_t k = r.begin(); k < r.end(); ++k)
                   planSplit(ctx, m_plans[k]);

@@ -104,8 +104,9 @@ class ParticleSet {
   /// permute() of fewer than this many particles goes column by column (permuteByColumns)
   static constexpr std::size_t kColumnTasksBelow = 16384;
   /// keeps the particles `keep` (strictly ascending indices) in their order and drops the others: in place,
-  /// moving only the particles after the first dropped one, each field on its own task (the merges of an
-  /// adaptation step drop a few particles of thousands: permute() gathered and copied back every field)
+  /// moving only the particles after the first dropped one, each field on its own task from 4,096 moves a
+  /// field on (the merges of an adaptation step drop a few particles of thousands: permute() gathered and
+  /// copied back every field)
   void retain(const std::vector<std::uint32_t>& keep);
   /// the next unused stable id
   std::uint32_t nextId() const { return m_nextId; }
