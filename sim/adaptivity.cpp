@@ -31,6 +31,9 @@ double uniform01(std::uint64_t& state) {
 // improve, and where the tries' axes start in the candidates' hash stream: past the 64 candidates at most
 // (the hash takes the low 8 bits of the index, so tries 0..63 are indices 64..127)
 constexpr double kRefineAngle = 0.8;
+// the most of a receiver's mass one adaptation step moves into it when the adaptation period scales the
+// transfer rate (transferMass; a transfer_rate above it is kept as set)
+constexpr double kMaxTransferPerAdaptation = 0.1;
 constexpr double kRefineShrink = 0.7;
 constexpr int kRefineStream = 64;
 
@@ -238,8 +241,12 @@ bool Adaptivity::transferMass(const AdaptContext& ctx, std::size_t donor, double
   const SimParams& params = ctx.params;
   m_candidates.clear();
   double capacity = 0.0;
-  // the transfer rate is per solver step: an adaptation every k steps may move k times as much
-  const double rate = params.transferRate * double(std::max(1, params.adaptationPeriod));
+  // the transfer rate is per solver step: an adaptation every k steps may move k times as much, but never
+  // more than kMaxTransferPerAdaptation of a receiver's mass at once (a receiver that jumps carries the
+  // density error of its jump into the next pressure solve: at adaptation_period = 100 the first adaptation
+  // moved up to 5 times a receiver's mass and the propeller blew up three steps later)
+  const double rate = std::min(params.transferRate * double(std::max(1, params.adaptationPeriod)),
+                               std::max(params.transferRate, kMaxTransferPerAdaptation));
   // A share goes to light neighbours (q < light_below). A merge may also fill neighbours that are nearly
   // right (q < merge_receivers_below, 1 by default) up to their optimal mass: with light ones only, a
   // too-light particle among right ones found no room, stayed, and was tried again every step (the hand tank

@@ -315,7 +315,16 @@ Row runModeRepeated(const sim::SceneDesc& scene, sim::AdaptivityMode mode, doubl
                     double imageTime, engine::HeadlessRender* render, int runs) {
   sim::SceneDesc still = scene;
   still.mode = mode;
-  const double rest = restingLevel(still, restTime);
+  double rest = 0.0;
+  try {
+    rest = restingLevel(still, restTime);
+  } catch (const sim::InstabilityError& e) {
+    // the mode's still run went unstable: a row that says so (exit code 4), not an abort
+    Row row;
+    row.mode = sim::modeName(mode);
+    row.status = std::string("still run: ") + e.what();
+    return row;
+  }
   Row row = runMode(scene, mode, simTime, rest, imageTime, render, nullptr);
   for (int k = 1; k < runs && row.status == "ok"; ++k) {
     std::fprintf(stderr, "    run %d of %d ...\n", k + 1, runs);

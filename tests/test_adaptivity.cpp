@@ -612,6 +612,54 @@ TEST(AdaptivityTest, AMergeFillsNearlyRightNeighboursUpToTheirOptimalMassSmall) 
   }
 }
 
+TEST(AdaptivityTest, AnAdaptationPeriodScalesTheTransferRateOnlyUpToACapSmall) {
+  // A too-light donor (0.25 m_fine) among six light receivers (0.6 m_fine, optimal m_fine). The transfer rate
+  // (0.05 a solver step) times the adaptation period bounds what a receiver takes at once: at period 1 the
+  // six rooms of 0.03 cannot hold the donor and the merge waits; at period 2 (0.1) it goes through; at period
+  // 100 the rate stays capped at 0.1, so no receiver jumps (uncapped, the nearest took all 0.25 at once, +42
+  // %, and the propeller at r = 0.00538 blew up three steps into its first adaptation).
+  for (const int period : {1, 2, 100}) {
+    SimParams params;
+    params.particleRadius = 0.01;
+    params.transferRate = 0.05;
+    params.adaptationPeriod = period;
+    const Real r = Real(params.particleRadius);
+    const Real mFine = Real(params.restDensity * 8e-6);
+    ParticleSet p;
+    const Real H = supportForMass(mFine, mFine, r);
+    p.add(Vec3::Zero(), Vec3(1, 0, 0), Real(0.25) * mFine, H, 1000.0f);
+    p.mOpt[0] = mFine;
+    for (int k = 0; k < 6; ++k) {
+      Vec3 at = Vec3::Zero();
+      at[k / 2] = Real(k % 2 == 0 ? 2 : -2) * r * Real(1 + 0.1 * k);  // distinct distances: nearest first
+      const std::size_t j = p.add(at, Vec3(0, Real(k), 0), Real(0.6) * mFine, H, 1000.0f);
+      p.mOpt[j] = mFine;
+    }
+    NeighborList fluidNbrs;
+    NeighborList boundaryNbrs;
+    allPairs(p.size(), fluidNbrs, boundaryNbrs);
+    BoundarySet boundary;
+    std::vector<ColliderState> colliders;
+    const double mass = p.totalMass();
+    Adaptivity adaptivity;
+    const AdaptivityStats st = adaptivity.adapt(
+        AdaptContext{p, fluidNbrs, boundaryNbrs, boundary, colliders, params, mFine, 0.0, 0}, true);
+    if (period == 1) {
+      EXPECT_EQ(st.merges, 0u);
+      EXPECT_EQ(p.size(), 7u);
+      continue;
+    }
+    EXPECT_EQ(st.merges, 1u) << period;
+    ASSERT_EQ(p.size(), 6u) << period;
+    double largest = 0.0;
+    for (std::size_t i = 0; i < p.size(); ++i)
+      largest = std::max(largest, double(p.m[i]) / (0.6 * double(mFine)) - 1.0);
+    EXPECT_LE(largest, 0.1 + 1e-5) << period;
+    EXPECT_GT(largest, 0.05) << period;
+    EXPECT_NEAR(p.totalMass(), mass, 1e-6 * mass);
+  }
+}
+
 TEST(AdaptivityTest, NeighbourListsAreInvalidAfterAStepThatSplitOrMergedSmall) {
   SceneDesc scene;
   scene.params.particleRadius = 0.012;

@@ -5,6 +5,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <vector>
@@ -201,6 +202,27 @@ TEST(CliTest, TheBenchmarksShareTheCommandLine) {
       EXPECT_EQ(lines[0].rfind(name + ": ", 0), 0u) << lines[0];
     }
   }
+}
+
+TEST(CliTest, BenchModesReportsAModeWhoseStillRunWentUnstable) {
+  // The still run that measures a mode's resting level goes unstable (every falling particle is above
+  // max_speed): a row that says so and exit code 4, not an abort from an uncaught exception.
+  std::istringstream exes(FP_BENCH_EXES);
+  std::string exe;
+  for (std::string e; exes >> e;)
+    if (std::filesystem::path(e).filename() == "fp_bench_modes")
+      exe = e;
+  ASSERT_FALSE(exe.empty());
+  const std::string out = fp::test::tempPath("bench_modes_unstable.out");
+  const int status =
+      std::system((exe + " --scene " + scene("tiny_dam_break.json") +
+                   " --modes surface --sim-time 0.05 --rest-time 0.2 --set max_speed=0.1 > " + out + " 2>&1")
+                      .c_str());
+  ASSERT_TRUE(WIFEXITED(status)) << "ended by a signal";
+  EXPECT_EQ(WEXITSTATUS(status), 4);
+  std::ifstream in(out);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("surface: still run: unstable at step"), std::string::npos) << text;
 }
 
 TEST(CliTest, SetIsCheckedByTheParameterTable) {
