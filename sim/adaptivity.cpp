@@ -25,18 +25,23 @@ double uniform01(std::uint64_t& state) {
   return double(state >> 11) * (1.0 / 9007199254740992.0);
 }
 
+// Orientation refinement (planSplit): the first try's angle [rad], the factor the angle is multiplied by
+// after a try that does not improve, and where the tries' axes start in the candidates' hash stream. The hash
+// keeps the low 8 bits of the index: candidates are 0..kMaxCandidates-1, tries
+// kRefineStream..kRefineStream+kMaxTries-1, all below 256 and apart.
+constexpr double kRefineAngle = 0.8;
+constexpr double kRefineShrink = 0.7;
+constexpr int kMaxCandidates = 64;  // the parameter table's limit of orientation_candidates
+constexpr int kMaxTries = 64;       // and of orientation_refinement
+constexpr int kRefineStream = kMaxCandidates;
+static_assert(kRefineStream >= kMaxCandidates && kRefineStream + kMaxTries <= 256);
+
+// The most of a receiver's mass one adaptation step moves into it when the adaptation period scales the
+// transfer rate (transferMass; a transfer_rate above it is kept as set).
+constexpr double kMaxTransferPerAdaptation = 0.1;
+
 /// Candidate k of a split: the identity for k = 0 (the unrotated template), else a uniformly random rotation
 /// (Shoemake 1992) drawn from the seed, the parent's id and the step, so runs are reproducible.
-// orientation refinement (planSplit): the first try's angle [rad], its shrink after a try that does not
-// improve, and where the tries' axes start in the candidates' hash stream: past the 64 candidates at most
-// (the hash takes the low 8 bits of the index, so tries 0..63 are indices 64..127)
-constexpr double kRefineAngle = 0.8;
-// the most of a receiver's mass one adaptation step moves into it when the adaptation period scales the
-// transfer rate (transferMass; a transfer_rate above it is kept as set)
-constexpr double kMaxTransferPerAdaptation = 0.1;
-constexpr double kRefineShrink = 0.7;
-constexpr int kRefineStream = 64;
-
 Quatd candidateRotation(std::uint64_t seed, std::uint32_t id, std::uint64_t step, int k) {
   if (k == 0)
     return Quatd::Identity();
@@ -193,7 +198,7 @@ void Adaptivity::planSplit(const AdaptContext& ctx, SplitPlan& plan) const {
     }
     return true;
   };
-  const int candidates = std::max(1, ctx.params.orientationCandidates);
+  const int candidates = std::clamp(ctx.params.orientationCandidates, 1, kMaxCandidates);
   plan.chosen = -1;
   plan.errorUnrotated = -1.0;
   for (int k = 0; k < candidates; ++k) {
@@ -213,11 +218,11 @@ void Adaptivity::planSplit(const AdaptContext& ctx, SplitPlan& plan) const {
   // Refinement around the best candidate: each try turns the chosen rotation by `angle` about a random axis
   // (drawn from the same hash as the candidates, so runs repeat) and is kept when it lowers the error; a try
   // that does not shrinks the angle. With 8 candidates, 8 tries raise the propeller's orientation gain from
-  // 12 % to 17 % (docs/method.md); more random candidates alone gave 14.5 % at 16 and 16.7 % at 32.
+  // 12.0 % to 17.6 % (docs/method.md); more random candidates alone gave 14.5 % at 16 and 16.7 % at 32.
   if (plan.chosen < 0)
     return;
   double angle = kRefineAngle;
-  for (int r = 0; r < ctx.params.orientationRefinement; ++r) {
+  for (int r = 0; r < std::min(ctx.params.orientationRefinement, kMaxTries); ++r) {
     const Vec3d axis =
         candidateRotation(ctx.params.seed, p.id[o], ctx.step, kRefineStream + r) * Vec3d::UnitZ();
     const Quatd rot = (plan.rotation * Quatd(Eigen::AngleAxisd(angle, axis))).normalized();

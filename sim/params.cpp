@@ -101,7 +101,9 @@ ParamTable::ParamTable() : ParamTableOf<SimParams>("parameter", &ParamTable::val
   add("split_above", "adaptivity", "-", 1.0, 10.0, live, "m / m_opt at or above which a particle splits",
       &P::splitAbove, 1.99);
   add("transfer_rate", "adaptivity", "-", 0.01, 1.0, live,
-      "most mass a merge or share receiver gains per solver step (share of its own)", &P::transferRate, 0.05);
+      "most mass a merge or share receiver gains per solver step (share of its own); an adaptation every k "
+      "steps moves k times as much, at most 0.1 at once (or transfer_rate, if higher)",
+      &P::transferRate, 0.05);
   add("support_blend_steps", "adaptivity", "steps", 0, 100, live,
       "steps over which a changed support radius is blended in (0: at once)", &P::supportBlendSteps, 10);
   add("split_blend_steps", "adaptivity", "steps", 0, 100, live,

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstring>
 #include <limits>
+#include <memory>
 #include <type_traits>
 
 #include "sim/parallel.h"
@@ -180,7 +181,7 @@ void ParticleSet::permuteByColumns(const std::vector<std::uint32_t>& order) {
   const std::size_t n = order.size();
   using Range = tbb::blocked_range<std::size_t>;
   parallelFor(Range(0, columns.size(), 1), [&](const Range& r) {
-    std::vector<Real> buffer(n);
+    const std::unique_ptr<Real[]> buffer(new Real[n]);  // every entry written before it is read
     for (std::size_t c = r.begin(); c < r.end(); ++c) {
       const Column col = columns[c];
       for (std::size_t k = 0; k < n; ++k)
@@ -204,7 +205,7 @@ void ParticleSet::retain(const std::vector<std::uint32_t>& keep) {
       field[k] = field[keep[k]];
     field.resize(n);
   };
-  if (n - first < kColumnTasksBelow / 4) {
+  if (n - first < kRetainTasksFrom) {
     // a few thousand moves a field: on one thread, which is faster at two threads than 21 tasks reading what
     // the other core wrote (the propeller: 9 ms a run on one thread, 18 ms as tasks on two)
     forEachField(move);

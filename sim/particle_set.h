@@ -101,12 +101,15 @@ class ParticleSet {
   /// reorders all fields so that new index k holds old particle order[k]; `order` is a permutation, or the
   /// indices of the particles to keep (the others are dropped)
   void permute(const std::vector<std::uint32_t>& order);
-  /// permute() of fewer than this many particles goes column by column (permuteByColumns)
+  /// permute() keeping fewer than this many particles (`order.size()`) goes column by column
+  /// (permuteByColumns)
   static constexpr std::size_t kColumnTasksBelow = 16384;
+  /// retain() moves each field on its own task from this many moves a field on, below on one thread
+  static constexpr std::size_t kRetainTasksFrom = 4096;
   /// keeps the particles `keep` (strictly ascending indices) in their order and drops the others: in place,
-  /// moving only the particles after the first dropped one, each field on its own task from 4,096 moves a
-  /// field on (the merges of an adaptation step drop a few particles of thousands: permute() gathered and
-  /// copied back every field)
+  /// moving only the particles after the first dropped one, each field on its own task from kRetainTasksFrom
+  /// moves a field on (the merges of an adaptation step drop a few particles of thousands: permute() gathered
+  /// and copied back every field)
   void retain(const std::vector<std::uint32_t>& keep);
   /// the next unused stable id
   std::uint32_t nextId() const { return m_nextId; }

@@ -577,8 +577,8 @@ int main(int argc, char** argv) {
     }
     // the orientation gain moves with which particles split: every run's, and pooled over the runs' splits
     std::printf(
-        "\norientation gain over %d runs (split error of the chosen rotation against the unrotated "
-        "template's, %%)\n",
+        "\norientation gain over up to %d runs (split error of the chosen rotation against the unrotated "
+        "template's, %%; a mode that went unstable stops its runs)\n",
         runs);
     std::printf("%-13s %8s %17s  %s\n", "mode", "pooled", "mean +- std", "runs");
     for (const Row& r : rows) {
@@ -613,8 +613,10 @@ int main(int argc, char** argv) {
       // the modes' images side by side, in the order of the table
       render::Image strip;
       std::vector<render::Image> parts;
+      // (a mode whose still run went unstable rendered nothing: its place is left out)
       for (const std::string& path : imagePaths)
-        parts.push_back(render::readPng(path));
+        if (std::filesystem::exists(path))
+          parts.push_back(render::readPng(path));
       strip.height = parts.empty() ? 0 : parts[0].height;
       for (const render::Image& im : parts)
         strip.width += im.width;

@@ -79,7 +79,8 @@ TEST(HeadlessAdaptiveTest, SplitErrorReductionIsTheOrientationChoice) {
   const fs::path dir = fs::temp_directory_path() / ("fp_headless_column_" + std::to_string(getpid()));
   fs::create_directories(dir);
   auto writeScene = [&](int candidates, int refinement) {
-    const fs::path path = dir / ("column_" + std::to_string(candidates) + ".json");
+    const fs::path path =
+        dir / ("column_" + std::to_string(candidates) + "_" + std::to_string(refinement) + ".json");
     std::ofstream(path)
         << R"({"name": "column", "domain": {"min": [-0.3, -0.1, -0.3], "max": [0.3, 0.4, 0.3]},
       "parameters": {"particle_radius": 0.01, "split_delay": 0, "orientation_candidates": )"

@@ -100,6 +100,7 @@ TEST(Memory, RetainDropsParticlesInPlaceAsPermuteDoes) {
     if (i % 7 != 3 && i != 0 && i != 4999)  // the first and the last dropped too
       keep.push_back(i);
   }
+  ASSERT_GE(keep.size(), sim::ParticleSet::kRetainTasksFrom);  // every field moved on its own task
   a.retain(keep);
   b.permute(keep);
   ASSERT_EQ(a.size(), keep.size());
@@ -121,6 +122,7 @@ TEST(Memory, RetainDropsParticlesInPlaceAsPermuteDoes) {
     if (i < 1000 || i % 97 != 0)
       most.push_back(i);
   }
+  ASSERT_LT(most.size() - 1000, sim::ParticleSet::kRetainTasksFrom);  // fewer moves: on one thread
   c.retain(most);
   ASSERT_EQ(c.size(), most.size());
   for (std::size_t k = 0; k < most.size(); ++k) {
@@ -134,44 +136,80 @@ TEST(Memory, RetainDropsParticlesInPlaceAsPermuteDoes) {
 }
 
 TEST(Memory, PermuteGathersEveryFieldBelowAndAboveTheColumnTasks) {
-  // a few thousand particles are reordered column by column, each column a task; more, field by field with
-  // the particles split among the threads: both give every field of every kept particle, in the new order
-  for (const std::size_t n : {std::size_t(3001), sim::ParticleSet::kColumnTasksBelow + 999}) {
-    sim::ParticleSet p;
-    p.setAdaptivityFields(true);
-    for (std::size_t k = 0; k < n; ++k) {
-      const float f = float(k);
-      const std::size_t i = p.add(sim::Vec3(f, -f, 0.5f * f), sim::Vec3(2 * f, 0, -f), f, f + 1, 1000);
-      p.a[i] = sim::Vec3(0, 3 * f, 1);
-      p.kappa[i] = f + 2;
-      p.flags[i] = std::uint32_t(k * 7);
-      p.mOpt[i] = f + 3;
-      p.heavySteps[i] = std::uint32_t(k + 4);
-      p.splitAge[i] = std::uint32_t(k + 5);
-    }
-    // reversed, every fifth dropped
-    std::vector<std::uint32_t> order;
-    for (std::size_t k = n; k-- > 0;) {
-      if (k % 5 != 2)
-        order.push_back(std::uint32_t(k));
-    }
-    const sim::ParticleSet before = p;
-    p.permute(order);
-    ASSERT_EQ(p.size(), order.size()) << n;
-    EXPECT_EQ(p.splitAge.size(), order.size()) << n;
-    for (std::size_t k = 0; k < order.size(); ++k) {
-      const std::uint32_t o = order[k];
-      ASSERT_EQ(p.x[k], before.x[o]) << n << " " << k;
-      ASSERT_EQ(p.v[k], before.v[o]) << n << " " << k;
-      ASSERT_EQ(p.a[k], before.a[o]) << n << " " << k;
-      ASSERT_EQ(p.m[k], before.m[o]) << n << " " << k;
-      ASSERT_EQ(p.H[k], before.H[o]) << n << " " << k;
-      ASSERT_EQ(p.kappa[k], before.kappa[o]) << n << " " << k;
-      ASSERT_EQ(p.id[k], before.id[o]) << n << " " << k;
-      ASSERT_EQ(p.flags[k], before.flags[o]) << n << " " << k;
-      ASSERT_EQ(p.mOpt[k], before.mOpt[o]) << n << " " << k;
-      ASSERT_EQ(p.heavySteps[k], before.heavySteps[o]) << n << " " << k;
-      ASSERT_EQ(p.splitAge[k], before.splitAge[o]) << n << " " << k;
+  // a few thousand kept particles are reordered column by column, each column a task; more, field by field
+  // with the particles split among the threads: both give every field of every kept particle, in the new
+  // order, with and without the adaptivity fields (every field holds a value of its own per particle)
+  const std::size_t above = sim::ParticleSet::kColumnTasksBelow * 5 / 4 + 999;  // 4 in 5 kept: still above
+  for (const bool adaptive : {true, false}) {
+    for (const std::size_t n : {std::size_t(3001), above}) {
+      sim::ParticleSet p;
+      p.setAdaptivityFields(adaptive);
+      for (std::size_t k = 0; k < n; ++k) {
+        const float f = float(k);
+        const std::size_t i =
+            p.add(sim::Vec3(f, -f, 0.5f * f), sim::Vec3(2 * f, 0.25f * f, -f), f, f + 1, 1000);
+        p.a[i] = sim::Vec3(0.5f * f, 3 * f, f + 1);
+        p.rho[i] = f + 1.5f;
+        p.kappa[i] = f + 2;
+        p.kappaV[i] = f + 2.5f;
+        p.flags[i] = std::uint32_t(k * 7);
+        if (!adaptive)
+          continue;
+        p.splitTime[i] = f + 3.5f;
+        p.levelPhi[i] = f + 4.5f;
+        p.levelOmega[i] = f + 5.5f;
+        p.levelNu[i] = f + 6.5f;
+        p.mOpt[i] = f + 3;
+        p.phi[i] = f + 7.5f;
+        p.omega[i] = f + 8.5f;
+        p.nu[i] = f + 9.5f;
+        p.heavySteps[i] = std::uint32_t(k + 4);
+        p.parentId[i] = std::uint32_t(k + 6);
+        p.splitAge[i] = std::uint32_t(k + 5);
+      }
+      // reversed, every fifth dropped
+      std::vector<std::uint32_t> order;
+      for (std::size_t k = n; k-- > 0;) {
+        if (k % 5 != 2)
+          order.push_back(std::uint32_t(k));
+      }
+      if (n == above)
+        ASSERT_GE(order.size(), sim::ParticleSet::kColumnTasksBelow);
+      else
+        ASSERT_LT(order.size(), sim::ParticleSet::kColumnTasksBelow);
+      const sim::ParticleSet before = p;
+      p.permute(order);
+      ASSERT_EQ(p.size(), order.size()) << n;
+      for (std::size_t k = 0; k < order.size(); ++k) {
+        const std::uint32_t o = order[k];
+        ASSERT_EQ(p.x[k], before.x[o]) << n << " " << k;
+        ASSERT_EQ(p.v[k], before.v[o]) << n << " " << k;
+        ASSERT_EQ(p.a[k], before.a[o]) << n << " " << k;
+        ASSERT_EQ(p.m[k], before.m[o]) << n << " " << k;
+        ASSERT_EQ(p.H[k], before.H[o]) << n << " " << k;
+        ASSERT_EQ(p.rho[k], before.rho[o]) << n << " " << k;
+        ASSERT_EQ(p.kappa[k], before.kappa[o]) << n << " " << k;
+        ASSERT_EQ(p.kappaV[k], before.kappaV[o]) << n << " " << k;
+        ASSERT_EQ(p.id[k], before.id[o]) << n << " " << k;
+        ASSERT_EQ(p.flags[k], before.flags[o]) << n << " " << k;
+        if (!adaptive)
+          continue;
+        ASSERT_EQ(p.splitTime[k], before.splitTime[o]) << n << " " << k;
+        ASSERT_EQ(p.levelPhi[k], before.levelPhi[o]) << n << " " << k;
+        ASSERT_EQ(p.levelOmega[k], before.levelOmega[o]) << n << " " << k;
+        ASSERT_EQ(p.levelNu[k], before.levelNu[o]) << n << " " << k;
+        ASSERT_EQ(p.mOpt[k], before.mOpt[o]) << n << " " << k;
+        ASSERT_EQ(p.phi[k], before.phi[o]) << n << " " << k;
+        ASSERT_EQ(p.omega[k], before.omega[o]) << n << " " << k;
+        ASSERT_EQ(p.nu[k], before.nu[o]) << n << " " << k;
+        ASSERT_EQ(p.heavySteps[k], before.heavySteps[o]) << n << " " << k;
+        ASSERT_EQ(p.parentId[k], before.parentId[o]) << n << " " << k;
+        ASSERT_EQ(p.splitAge[k], before.splitAge[o]) << n << " " << k;
+      }
+      if (adaptive)
+        EXPECT_EQ(p.splitAge.size(), order.size()) << n;
+      else
+        EXPECT_TRUE(p.splitAge.empty()) << n;
     }
   }
 }
