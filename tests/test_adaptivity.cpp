@@ -564,38 +564,54 @@ TEST(AdaptivityTest, MergeLeavesNoSliverOfTheDonorSmall) {
   EXPECT_LT((p.totalMomentum() - momentum).norm(), 1e-6 * mass);
 }
 
+/// A too-light donor (0.25 m_fine at the origin, moving at (1, 0, 0)) among six receivers of `receiverMass`
+/// fine masses, optimal mass m_fine, on the axes at 2r, the k-th (1 + spread k) times that far; adapt() runs
+/// one adaptation step over all pairs (r = 0.01 m).
+struct DonorAmongSix {
+  SimParams params;
+  Real mFine = 0;
+  ParticleSet p;
+  DonorAmongSix(const SimParams& base, Real receiverMass, Real spread) : params(base) {
+    params.particleRadius = 0.01;
+    const Real r = Real(params.particleRadius);
+    mFine = Real(params.restDensity * 8e-6);
+    const Real H = supportForMass(mFine, mFine, r);
+    p.add(Vec3::Zero(), Vec3(1, 0, 0), Real(0.25) * mFine, H, 1000.0f);
+    p.mOpt[0] = mFine;
+    for (int k = 0; k < 6; ++k) {
+      Vec3 at = Vec3::Zero();
+      at[k / 2] = Real(k % 2 == 0 ? 2 : -2) * r * (1 + spread * Real(k));
+      const std::size_t j = p.add(at, Vec3(0, Real(k), 0), receiverMass * mFine, H, 1000.0f);
+      p.mOpt[j] = mFine;
+    }
+  }
+  AdaptivityStats adapt() {
+    NeighborList fluidNbrs;
+    NeighborList boundaryNbrs;
+    allPairs(p.size(), fluidNbrs, boundaryNbrs);
+    BoundarySet boundary;
+    std::vector<ColliderState> colliders;
+    Adaptivity adaptivity;
+    return adaptivity.adapt(
+        AdaptContext{p, fluidNbrs, boundaryNbrs, boundary, colliders, params, mFine, 0.0, 0}, true);
+  }
+};
+
 TEST(AdaptivityTest, AMergeFillsNearlyRightNeighboursUpToTheirOptimalMassSmall) {
   // A too-light donor (q = 0.25) among neighbours at q = 0.95: none is light (q < light_below = 0.9), so with
   // merge_receivers_below = light_below it stays, and it is tried again every step. With the default (1) they
   // take it, none above its optimal mass, mass and momentum kept.
   for (const double receiversBelow : {0.9, 1.0}) {
     SimParams params;
-    params.particleRadius = 0.01;
     params.transferRate = 1.0;
     params.mergeReceiversBelow = receiversBelow;
-    const Real r = Real(params.particleRadius);
-    const Real mFine = Real(params.restDensity * 8e-6);
-    ParticleSet p;
-    const Real H = supportForMass(mFine, mFine, r);
     // six rooms of 0.05 m_fine hold the donor's 0.25
-    p.add(Vec3::Zero(), Vec3(1, 0, 0), Real(0.25) * mFine, H, 1000.0f);
-    p.mOpt[0] = mFine;
-    for (int k = 0; k < 6; ++k) {
-      Vec3 at = Vec3::Zero();
-      at[k / 2] = Real(k % 2 == 0 ? 2 : -2) * r;
-      const std::size_t j = p.add(at, Vec3(0, Real(k), 0), Real(0.95) * mFine, H, 1000.0f);
-      p.mOpt[j] = mFine;
-    }
-    NeighborList fluidNbrs;
-    NeighborList boundaryNbrs;
-    allPairs(p.size(), fluidNbrs, boundaryNbrs);
-    BoundarySet boundary;
-    std::vector<ColliderState> colliders;
+    DonorAmongSix six(params, Real(0.95), 0);
+    ParticleSet& p = six.p;
+    const Real mFine = six.mFine;
     const double mass = p.totalMass();
     const Vec3d momentum = p.totalMomentum();
-    Adaptivity adaptivity;
-    const AdaptivityStats st = adaptivity.adapt(
-        AdaptContext{p, fluidNbrs, boundaryNbrs, boundary, colliders, params, mFine, 0.0, 0}, true);
+    const AdaptivityStats st = six.adapt();
     if (receiversBelow < 1.0) {
       EXPECT_EQ(st.merges, 0u);
       EXPECT_EQ(p.size(), 7u);
@@ -620,30 +636,13 @@ TEST(AdaptivityTest, AnAdaptationPeriodScalesTheTransferRateOnlyUpToACapSmall) {
   // %, and the propeller at r = 0.00538 blew up three steps into its first adaptation).
   for (const int period : {1, 2, 100}) {
     SimParams params;
-    params.particleRadius = 0.01;
     params.transferRate = 0.05;
     params.adaptationPeriod = period;
-    const Real r = Real(params.particleRadius);
-    const Real mFine = Real(params.restDensity * 8e-6);
-    ParticleSet p;
-    const Real H = supportForMass(mFine, mFine, r);
-    p.add(Vec3::Zero(), Vec3(1, 0, 0), Real(0.25) * mFine, H, 1000.0f);
-    p.mOpt[0] = mFine;
-    for (int k = 0; k < 6; ++k) {
-      Vec3 at = Vec3::Zero();
-      at[k / 2] = Real(k % 2 == 0 ? 2 : -2) * r * Real(1 + 0.1 * k);  // distinct distances: nearest first
-      const std::size_t j = p.add(at, Vec3(0, Real(k), 0), Real(0.6) * mFine, H, 1000.0f);
-      p.mOpt[j] = mFine;
-    }
-    NeighborList fluidNbrs;
-    NeighborList boundaryNbrs;
-    allPairs(p.size(), fluidNbrs, boundaryNbrs);
-    BoundarySet boundary;
-    std::vector<ColliderState> colliders;
+    DonorAmongSix six(params, Real(0.6), Real(0.1));  // distinct distances: nearest first
+    ParticleSet& p = six.p;
+    const Real mFine = six.mFine;
     const double mass = p.totalMass();
-    Adaptivity adaptivity;
-    const AdaptivityStats st = adaptivity.adapt(
-        AdaptContext{p, fluidNbrs, boundaryNbrs, boundary, colliders, params, mFine, 0.0, 0}, true);
+    const AdaptivityStats st = six.adapt();
     if (period == 1) {
       EXPECT_EQ(st.merges, 0u);
       EXPECT_EQ(p.size(), 7u);
