@@ -86,8 +86,10 @@ struct Declaration {
                       window = "Window", headless = "Headless";
     app.get_help_ptr()->group(run);
     app.add_flag("--headless", o.headless, "run without a window")->group(run);
-    app.add_option("--scene", o.scenePath,
-                   "scene JSON (default assets/scenes/hand_tank.json in the window, dam_break.json headless)")
+    app.add_option(
+           "--scene", o.scenePath,
+           "scene JSON (default assets/scenes/hand_tank.json in the window, hand_tank_coarse.json there "
+           "on software OpenGL, dam_break.json headless)")
         ->type_name("FILE")
         ->group(run);
     app.add_option("--mode", o.mode,
@@ -299,8 +301,10 @@ CliOptions parseCommandLine(const std::vector<std::string>& args) {
       throw std::invalid_argument("--color applies to --view particles, not --view fluid");
     o.view = "particles";
   }
-  if (o.scenePath.empty())
+  if (o.scenePath.empty()) {
     o.scenePath = o.headless ? defaultScenePath() : defaultAppScenePath();
+    o.sceneDefaulted = true;
+  }
   return o;
 }
 
@@ -394,6 +398,19 @@ std::string assetPath(const std::string& relative) {
 
 std::string defaultAppScenePath() {
   return assetPath("assets/scenes/hand_tank.json");
+}
+
+std::string softwareGlScenePath() {
+  return assetPath("assets/scenes/hand_tank_coarse.json");
+}
+
+bool isSoftwareGl(const std::string& contextDescription) {
+  for (const char* name :
+       {"llvmpipe", "softpipe", "swrast", "Software Rasterizer", "Software Renderer", "GDI Generic"}) {
+    if (contextDescription.find(name) != std::string::npos)
+      return true;
+  }
+  return false;
 }
 
 std::string defaultScenePath() {

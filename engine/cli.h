@@ -31,6 +31,7 @@ struct CliOptions {
   bool help = false;              ///< --help
   bool headless = false;          ///< --headless
   std::string scenePath;          ///< --scene FILE (default: the hand tank in the window, else the dam break)
+  bool sceneDefaulted = false;    ///< no --scene was given: scenePath is the default of the mode
   std::optional<int> frames;      ///< --frames N
   std::optional<double> simTime;  ///< --sim-time S
   int threads = 0;                ///< --threads T (0: all cores)
@@ -133,8 +134,15 @@ class ThreadLimit {
 /// The default scene of the headless mode: assets/scenes/dam_break.json in the working directory, else in the
 /// source tree.
 std::string defaultScenePath();
-/// The default scene of the window: assets/scenes/hand_tank.json, found like defaultScenePath().
+/// The default scene of the window: assets/scenes/hand_tank.json (r = 5 mm), found like defaultScenePath().
 std::string defaultAppScenePath();
+/// The window's default where it draws with software OpenGL: assets/scenes/hand_tank_coarse.json
+/// (r = 7.9 mm), which keeps the frame rate and the simulation near real time with the rasteriser on the
+/// simulation's cores.
+std::string softwareGlScenePath();
+/// Whether an OpenGL context description ("version, renderer", as the window reports it) names a software
+/// rasteriser: Mesa's llvmpipe, softpipe or swrast, Apple's or Microsoft's software renderer.
+bool isSoftwareGl(const std::string& contextDescription);
 /// An asset path relative to the repository (e.g. "assets/hands/push.csv"): here, else in the source tree.
 std::string assetPath(const std::string& relative);
 

@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstring>
 #include <functional>
+#include <string>
 #include <vector>
 
 #include "engine/scene_loader.h"
@@ -90,10 +91,19 @@ TEST(AdaptivePhysicsTest, TankAtRestStaysStillFineAtTheSurfaceCoarseInside) {
 
 // The desktop's resting tank (issue 14, docs/method.md "The adaptive tank at rest"): once settled, the
 // resolution stops churning and the water does not stand high. Before the hysteresis of the targets
-// (kTargetBand, sim/levels.cpp) the defaults ran 4.5 splits and merges and 45 shares a step from 1 s to 1.5 s
-// and the surface stood 7.3 mm above uniform-high's.
-TEST(AdaptivePhysicsTest, HandTankAtRestStopsChurningAndStandsNearUniformHigh) {
-  SceneDesc scene = fp::engine::loadScene(std::string(FP_SOURCE_DIR) + "/assets/scenes/hand_tank.json");
+// (kTargetBand, sim/levels.cpp) the coarse tank ran 4.5 splits and merges and 45 shares a step from 1 s to
+// 1.5 s and the surface stood 7.3 mm above uniform-high's.
+namespace {
+
+struct RestingTank {
+  double splitsMerges = 0;  ///< a step, from 1 s to 1.5 s
+  double shares = 0;        ///< a step, from 1 s to 1.5 s
+  double above = 0;         ///< mean surface from 1 s to 1.5 s above uniform-high's at 1.5 s [m]
+  std::size_t particles = 0;
+};
+
+RestingTank restingTank(const std::string& file, double uniformHighSurface) {
+  SceneDesc scene = fp::engine::loadScene(std::string(FP_SOURCE_DIR) + "/assets/scenes/" + file);
   scene.mode = AdaptivityMode::FluidPlaying;
   Simulation sim(scene);
   const double mass0 = sim.totalMass();
@@ -124,23 +134,47 @@ TEST(AdaptivePhysicsTest, HandTankAtRestStopsChurningAndStandsNearUniformHigh) {
       ++steps;
     }
   }
-  ASSERT_GT(steps, 0);
+  EXPECT_GT(steps, 0);
   EXPECT_NEAR(sim.totalMass(), mass0, 1e-6 * mass0);
-  const double splitsMerges = double(ops.splits + ops.merges) / steps;
-  const double shares = double(ops.redistributions) / steps;
-  // uniform-high's surface there at 1.5 s: 0.1308 m (deterministic, a run of 5984 particles)
-  const double above = surfaceSum / steps - 0.1308;
+  RestingTank t;
+  t.splitsMerges = double(ops.splits + ops.merges) / std::max(1, steps);
+  t.shares = double(ops.redistributions) / std::max(1, steps);
+  t.above = surfaceSum / std::max(1, steps) - uniformHighSurface;
+  t.particles = sim.particles().size();
   std::printf(
-      "hand tank at rest, 1 s to 1.5 s: %.2f splits and merges, %.1f shares a step; surface %.1f mm above "
+      "%s at rest, 1 s to 1.5 s: %.2f splits and merges, %.1f shares a step; surface %.1f mm above "
       "uniform-high's; %zu particles\n",
-      splitsMerges, shares, 1000.0 * above, sim.particles().size());
+      file.c_str(), t.splitsMerges, t.shares, 1000.0 * t.above, t.particles);
+  return t;
+}
+
+}  // namespace
+
+TEST(AdaptivePhysicsTest, HandTankAtRestStopsChurningAndStandsNearUniformHigh) {
+  // r = 7.9 mm; uniform-high's surface there at 1.5 s: 0.1308 m (deterministic, a run of 5984 particles)
+  const RestingTank t = restingTank("hand_tank_coarse.json", 0.1308);
   // measured 1.93 and 15.4 (bounds 2.5 and 30); the surface 6.6 mm above (bound 7 mm: 5.5 mm when the
   // hysteresis came, 7.3 mm before it; 6.4 mm on cd6cdab, before the divergence solve's warm start skipped
   // particles with fewer than 20 neighbours: the figure moves by tenths of a millimetre with any change to
   // the solver's trajectory)
-  EXPECT_LT(splitsMerges, 2.5);
-  EXPECT_LT(shares, 30.0);
-  EXPECT_LT(std::abs(above), 0.007);
+  EXPECT_LT(t.splitsMerges, 2.5);
+  EXPECT_LT(t.shares, 30.0);
+  EXPECT_LT(std::abs(t.above), 0.007);
+}
+
+// The desktop's default tank (r = 5 mm, 30 fine radii deep against 19 in the coarse one) stands closer to
+// uniform-high's surface, but its deep coarse water under a fine surface keeps more particles circulating
+// between the layers: measured 12.8 splits and merges and 68 shares a step of 2,712 particles (0.47 % and
+// 2.5 % of them, against 0.17 % and 1.4 % in the coarse tank), the surface 4.0 mm above uniform-high's.
+// Most merged particles were fine ones carried under the surface, most split parents coarser ones come up
+// to it (a scratch driver following the particles' ids; docs/method.md, "The adaptive tank at rest").
+TEST(AdaptivePhysicsTest, DefaultHandTankAtRestStandsNearUniformHighAndChurnsBoundedly) {
+  // uniform-high's surface at 1.5 s: 0.1266 m (23,426 particles)
+  const RestingTank t = restingTank("hand_tank.json", 0.1266);
+  EXPECT_LT(t.splitsMerges, 16.0);
+  EXPECT_LT(t.shares, 85.0);
+  EXPECT_LT(std::abs(t.above), 0.006);
+  EXPECT_LT(double(t.particles), 0.15 * 23426.0);
 }
 
 TEST(AdaptivePhysicsTest, PropellerDrawsFineParticlesIntoItsVorticesUnlikeSurfaceOnly) {

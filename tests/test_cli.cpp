@@ -308,6 +308,21 @@ TEST(CliTest, ParsesAppOptions) {
   EXPECT_TRUE(o.noPanel);
   // the window's default scene is the hand tank, the headless mode's the dam break
   EXPECT_NE(parseCommandLine({}).scenePath.find("hand_tank.json"), std::string::npos);
+  EXPECT_TRUE(parseCommandLine({}).sceneDefaulted);
+  EXPECT_FALSE(parseCommandLine({"--scene", "x.json"}).sceneDefaulted);
+  // the window's default plays at r = 5 mm, where a finger spans a particle; software OpenGL gets the coarse
+  // tank (7.9 mm), the same tank otherwise
+  const fp::sim::SceneDesc fine = loadScene(parseCommandLine({}).scenePath);
+  const fp::sim::SceneDesc coarse = loadScene(softwareGlScenePath());
+  EXPECT_DOUBLE_EQ(fine.params.particleRadius, 0.005);
+  EXPECT_DOUBLE_EQ(coarse.params.particleRadius, 0.0079);
+  EXPECT_EQ(fine.mode, coarse.mode);
+  EXPECT_EQ(fine.fluid.size(), coarse.fluid.size());
+  EXPECT_EQ(fine.colliders.size(), coarse.colliders.size());
+  EXPECT_TRUE(isSoftwareGl("4.5 (Core Profile) Mesa 22.3.6, llvmpipe (LLVM 15.0.6, 256 bits)"));
+  EXPECT_TRUE(isSoftwareGl("3.3 (Core Profile) Mesa 22.3.6, softpipe"));
+  EXPECT_FALSE(isSoftwareGl("4.6.0 NVIDIA 535.183.01, NVIDIA GeForce RTX 3060/PCIe/SSE2"));
+  EXPECT_FALSE(isSoftwareGl("4.6 (Core Profile) Mesa 22.3.6, AMD Radeon RX 6600 (navi23, LLVM 15.0.6)"));
   EXPECT_NE(parseCommandLine({"--headless"}).scenePath.find("dam_break.json"), std::string::npos);
   // the hand script also works headless; window-only options do not
   EXPECT_EQ(parseCommandLine({"--headless", "--hand-script", "h.csv"}).handScript, "h.csv");

@@ -5,6 +5,9 @@
 
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <string>
 
 #include "engine/app_loop.h"
 #include "engine/cli.h"
@@ -62,7 +65,7 @@ TEST(AppWindowTest, RecordedHandPushesTheWaterPanelDrawnScreenshotWritten) {
   // reach 0.67 s. Uniform-high starts the water at rest, so all of its momentum comes from the hand (in the
   // closed tank the far wall later pushes it back: the test looks at the largest momentum during the push).
   const CliOptions o =
-      parseCommandLine({"--scene", src + "/assets/scenes/hand_tank.json", "--mode", "uniform-high",
+      parseCommandLine({"--scene", src + "/assets/scenes/hand_tank_coarse.json", "--mode", "uniform-high",
                         "--hand-script", src + "/assets/hands/push.csv", "--fixed-step", "--frames", "40",
                         "--width", "480", "--height", "320", "--screenshot", shot});
   DesktopPlatform window(o, o.frames);
@@ -109,4 +112,37 @@ TEST(AppWindowTest, ExecutableWritesScreenshotOfItsLastFrame) {
   const render::Image image = render::readPng(shot);
   EXPECT_EQ(image.width, 320);
   EXPECT_EQ(image.height, 200);
+}
+
+// The window's default scene is the hand tank at r = 5 mm; where the window draws with software OpenGL
+// (llvmpipe under Xvfb) the rasteriser shares the simulation's cores, and the window loads the coarse tank
+// instead, saying so in one line. A scene given on the command line is always the one loaded.
+TEST(AppWindowTest, DefaultSceneIsTheFineHandTankExceptOnSoftwareGl) {
+  if (!haveDisplay())
+    GTEST_SKIP() << "no DISPLAY: window tests run under Xvfb (scripts/bootstrap.sh test does)";
+  const std::string out = (std::filesystem::path(::testing::TempDir()) / "fp_app_default.txt").string();
+  auto run = [&out](const std::string& args) {
+    const std::string cmd = std::string(FP_FLUIDPLAYING_EXE) +
+                            " --frames 2 --width 160 --height 120 --no-panel " + args + " > " + out;
+    EXPECT_EQ(std::system(cmd.c_str()), 0) << cmd;
+    std::ifstream in(out);
+    return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  };
+  const std::string defaulted = run("");
+  const std::size_t window = defaulted.find("window ");
+  ASSERT_NE(window, std::string::npos) << defaulted;
+  const std::string context = defaulted.substr(window, defaulted.find(';', window) - window);
+  const bool software = isSoftwareGl(context);
+  if (context.find("llvmpipe") != std::string::npos) {  // Xvfb's Mesa, as in CI
+    EXPECT_TRUE(software) << context;
+  }
+  EXPECT_EQ(defaulted.find("software OpenGL: the coarse hand tank") != std::string::npos, software)
+      << defaulted;
+  EXPECT_NE(defaulted.find(software ? "; scene hand tank coarse (fluidplaying)"
+                                    : "; scene hand tank (fluidplaying)"),
+            std::string::npos)
+      << defaulted;
+  const std::string given = run("--scene " FP_SOURCE_DIR "/assets/scenes/hand_tank.json");
+  EXPECT_EQ(given.find("software OpenGL"), std::string::npos) << given;
+  EXPECT_NE(given.find("; scene hand tank (fluidplaying)"), std::string::npos) << given;
 }

@@ -1,14 +1,15 @@
 #pragma once
-// The scenes of issue 14's look tests, from particle states exported by the simulation (tests/gl/data/):
-//   hand_tank_rest_*.ply   assets/scenes/hand_tank.json, no hand, frame 90 (1.5 s), M = uniform-high or
+// The scenes of issue 14's look tests, from particle states exported by the simulation (tests/gl/data/), of
+// the r = 7.9 mm hand tank (named hand_tank.json until session 15 made r = 5 mm the default):
+//   hand_tank_rest_*.ply   assets/scenes/hand_tank_coarse.json, no hand, frame 90 (1.5 s), M = uniform-high or
 //                          fluidplaying: DIR/frame_00090.ply (the same bytes for any --threads) of
-//     fluidplaying --headless --scene assets/scenes/hand_tank.json --mode M --frames 90 --export DIR
+//     fluidplaying --headless --scene assets/scenes/hand_tank_coarse.json --mode M --frames 90 --export DIR
 //   propeller_moving.ply   assets/scenes/propeller.json, fluidplaying, frame 60 (1 s): fine and coarse
 //                          particles stirred by the propeller
-//   hand_tank_push_fluidplaying.ply   assets/scenes/hand_tank.json, fluidplaying, the recorded hand
+//   hand_tank_push_fluidplaying.ply   assets/scenes/hand_tank_coarse.json, fluidplaying, the recorded hand
 //                          assets/hands/push.csv pushing the water along +x, frame 40 (0.67 s):
 //                          DIR/frame_00040.ply of
-//     fluidplaying --headless --scene assets/scenes/hand_tank.json --mode fluidplaying
+//     fluidplaying --headless --scene assets/scenes/hand_tank_coarse.json --mode fluidplaying
 //                  --hand-script assets/hands/push.csv --frames 40 --export DIR
 //                          (exported in session 7 from main 56f09fa; the hand itself is not in the state)
 // Regenerated in session 7 from main aafb6e0, because the simulation had changed since the states were

@@ -53,7 +53,7 @@ nlohmann::json readJson(const std::string& path) {
 }
 
 const std::string kSource = FP_SOURCE_DIR;
-const std::string kHandTank = " --scene " + kSource + "/assets/scenes/hand_tank.json";
+const std::string kHandTank = " --scene " + kSource + "/assets/scenes/hand_tank_coarse.json";
 
 /// the runtime as the app tests use it: virtual time unless told, the head low enough that the tank on its
 /// table is in view, the recording's frame (the hand tank's) on the table; returns the validation file
@@ -116,7 +116,7 @@ TEST(XrApp, SessionSurvivesLossPendingEndsWithTheRuntimeAndDrawsBothEyes) {
   setenv("FP_XR_HANDS_OFFSET", "0,0.75,-0.5", 1);
   setenv("FP_XR_EVENTS", "8:loss_pending,24:exit", 1);
   setenv("FP_XR_CAPTURE", ("20," + dir).c_str(), 1);
-  const AppRun run = runApp("--xr --no-window --scene " FP_SOURCE_DIR "/assets/scenes/hand_tank.json");
+  const AppRun run = runApp("--xr --no-window --scene " FP_SOURCE_DIR "/assets/scenes/hand_tank_coarse.json");
   EXPECT_EQ(run.code, 0) << run.output;
   EXPECT_NE(run.output.find("sessions recreated 1"), std::string::npos) << run.output;
   EXPECT_EQ(test::runtimeStat(stats, "sessions"), 2);
@@ -431,7 +431,7 @@ TEST(XrHands, TrackingLostMidPushNeverJumpsThroughTheWater) {
   engine::CliOptions o;
   o.headless = true;
   o.quiet = true;
-  o.scenePath = kSource + "/assets/scenes/hand_tank.json";
+  o.scenePath = kSource + "/assets/scenes/hand_tank_coarse.json";
   o.handScript = recording;
   o.frames = 66;  // 1.1 s
   const double frameDt = 1.0 / 60.0, easeSpeed = 1.0;
