@@ -28,7 +28,8 @@ using namespace fp::engine;
 int runWindow(CliOptions options) {
   // the window and its shaders first: a missing shader stops the run before the scene is built
   DesktopPlatform platform(options, options.frames);
-  if (options.sceneDefaulted && isSoftwareGl(platform.contextDescription())) {
+  // (not with --load-state: a saved state belongs to the scene it was saved from, the default one)
+  if (options.sceneDefaulted && options.loadState.empty() && isSoftwareGl(platform.contextDescription())) {
     // the rasteriser draws on the simulation's cores: the r = 5 mm tank ran at 0.66 of real time there
     options.scenePath = softwareGlScenePath();
     if (!options.quiet) {

@@ -317,10 +317,27 @@ TEST(CliTest, ParsesAppOptions) {
   EXPECT_DOUBLE_EQ(fine.params.particleRadius, 0.005);
   EXPECT_DOUBLE_EQ(coarse.params.particleRadius, 0.0079);
   EXPECT_EQ(fine.mode, coarse.mode);
-  EXPECT_EQ(fine.fluid.size(), coarse.fluid.size());
-  EXPECT_EQ(fine.colliders.size(), coarse.colliders.size());
+  EXPECT_EQ(fine.domain.min(), coarse.domain.min());
+  EXPECT_EQ(fine.domain.max(), coarse.domain.max());
+  EXPECT_EQ(fine.simTime, coarse.simTime);
+  EXPECT_EQ(fine.frameRate, coarse.frameRate);
+  ASSERT_EQ(fine.fluid.size(), coarse.fluid.size());
+  for (std::size_t k = 0; k < fine.fluid.size(); ++k) {
+    EXPECT_EQ(fine.fluid[k].box.min(), coarse.fluid[k].box.min());
+    EXPECT_EQ(fine.fluid[k].box.max(), coarse.fluid[k].box.max());
+  }
+  ASSERT_EQ(fine.colliders.size(), coarse.colliders.size());
+  for (std::size_t k = 0; k < fine.colliders.size(); ++k) {
+    EXPECT_EQ(fine.colliders[k].halfExtents, coarse.colliders[k].halfExtents);
+    EXPECT_EQ(fine.colliders[k].position, coarse.colliders[k].position);
+    EXPECT_EQ(fine.colliders[k].headroom, coarse.colliders[k].headroom);
+    EXPECT_EQ(fine.colliders[k].container, coarse.colliders[k].container);
+  }
   EXPECT_TRUE(isSoftwareGl("4.5 (Core Profile) Mesa 22.3.6, llvmpipe (LLVM 15.0.6, 256 bits)"));
   EXPECT_TRUE(isSoftwareGl("3.3 (Core Profile) Mesa 22.3.6, softpipe"));
+  EXPECT_TRUE(isSoftwareGl("2.1 Mesa 22.3.6, Software Rasterizer"));
+  EXPECT_TRUE(isSoftwareGl("4.1 Metal - 83.1, Apple Software Renderer"));
+  EXPECT_TRUE(isSoftwareGl("1.1.0, GDI Generic"));
   EXPECT_FALSE(isSoftwareGl("4.6.0 NVIDIA 535.183.01, NVIDIA GeForce RTX 3060/PCIe/SSE2"));
   EXPECT_FALSE(isSoftwareGl("4.6 (Core Profile) Mesa 22.3.6, AMD Radeon RX 6600 (navi23, LLVM 15.0.6)"));
   EXPECT_NE(parseCommandLine({"--headless"}).scenePath.find("dam_break.json"), std::string::npos);

@@ -145,4 +145,12 @@ TEST(AppWindowTest, DefaultSceneIsTheFineHandTankExceptOnSoftwareGl) {
   const std::string given = run("--scene " FP_SOURCE_DIR "/assets/scenes/hand_tank.json");
   EXPECT_EQ(given.find("software OpenGL"), std::string::npos) << given;
   EXPECT_NE(given.find("; scene hand tank (fluidplaying)"), std::string::npos) << given;
+  // a saved state belongs to the default scene it was saved from: never switched (the coarse tank refuses it)
+  const std::string state = (std::filesystem::path(::testing::TempDir()) / "fp_app_default.state").string();
+  std::filesystem::remove(state);
+  run("--scene " FP_SOURCE_DIR "/assets/scenes/hand_tank.json --save-state " + state);
+  ASSERT_TRUE(std::filesystem::exists(state)) << state;
+  const std::string loaded = run("--load-state " + state);
+  EXPECT_EQ(loaded.find("software OpenGL"), std::string::npos) << loaded;
+  EXPECT_NE(loaded.find("; scene hand tank (fluidplaying)"), std::string::npos) << loaded;
 }

@@ -1,8 +1,8 @@
 #pragma once
 // The scenes of issue 14's look tests, from particle states exported by the simulation (tests/gl/data/), of
 // the r = 7.9 mm hand tank (named hand_tank.json until session 15 made r = 5 mm the default):
-//   hand_tank_rest_*.ply   assets/scenes/hand_tank_coarse.json, no hand, frame 90 (1.5 s), M = uniform-high or
-//                          fluidplaying: DIR/frame_00090.ply (the same bytes for any --threads) of
+//   hand_tank_rest_*.ply   assets/scenes/hand_tank_coarse.json, no hand, frame 90 (1.5 s), M = uniform-high
+//                          or fluidplaying: DIR/frame_00090.ply (the same bytes for any --threads) of
 //     fluidplaying --headless --scene assets/scenes/hand_tank_coarse.json --mode M --frames 90 --export DIR
 //   propeller_moving.ply   assets/scenes/propeller.json, fluidplaying, frame 60 (1 s): fine and coarse
 //                          particles stirred by the propeller
