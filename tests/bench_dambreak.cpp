@@ -78,6 +78,7 @@ struct Options {
   double handTime = 1.0;          ///< --hand-time: simulated seconds of each hand-tank run of the suite
   double speedLog = 0;            ///< --speed-log: simulated seconds between speed lines, 0 = none
   bool memory = false;            ///< --memory: bytes per fluid particle by component, the suite's scenes
+  bool scaling = false;           ///< --scaling: the default hand tank at each --threads count
 };
 
 std::vector<int> parseThreadList(const std::string& text) {
@@ -153,6 +154,10 @@ struct CommandLine {
         "every S simulated seconds, print the window's step count, smallest step, largest speed (with where "
         "the fastest particle was: distance to each wall of the boundary's bounding box), the 99.9th "
         "percentile speed and the particles above sqrt(2 g H), H the fluid's initial height (issue #12)");
+    app.add_flag(
+        "--scaling", o.scaling,
+        "the default hand tank (r = 5 mm, the splash hand, --hand-time) once per --threads count, and "
+        "the speed-up over the first count (e.g. --threads 1,2,4,8,16)");
     app.add_flag("--memory", o.memory,
                  "bytes per fluid particle by component (issue #12) for the suite's scenes: hand tank at "
                  "r = 5 mm and coarse (--hand-time, 2 threads), reference dam break (--sim-time, default "
@@ -641,7 +646,7 @@ void writeSuiteCsv(std::ostream& out, const std::vector<SuiteRow>& rows) {
   }
 }
 
-void printSuite(std::ostream& out, const std::vector<SuiteRow>& rows, double damTime) {
+void printSuiteTable(std::ostream& out, const std::vector<SuiteRow>& rows) {
   std::vector<std::size_t> width;
   for (const auto& [name, get] : suiteColumns()) {
     std::size_t w = std::string(name).size();
@@ -665,6 +670,25 @@ void printSuite(std::ostream& out, const std::vector<SuiteRow>& rows, double dam
   }
   out << "\nCSV:\n";
   writeSuiteCsv(out, rows);
+}
+
+/// --scaling: the default hand tank's rows at each thread count, and the speed-up over the first count.
+void printScaling(std::ostream& out, const std::vector<SuiteRow>& rows) {
+  printSuiteTable(out, rows);
+  out << "\nspeed-up over " << rows.front().threads << " thread(s), by us per particle-step:\n";
+  for (const SuiteRow& r : rows) {
+    char text[160];
+    std::snprintf(text, sizeof(text),
+                  "  %3d threads: %6.3f us per particle-step, speed-up %5.2f, real-time factor %6.3f\n",
+                  r.threads, r.usPerParticleStep,
+                  r.usPerParticleStep > 0 ? rows.front().usPerParticleStep / r.usPerParticleStep : 0.0,
+                  r.realTime());
+    out << text;
+  }
+}
+
+void printSuite(std::ostream& out, const std::vector<SuiteRow>& rows, double damTime) {
+  printSuiteTable(out, rows);
   // the issue's targets, each from the rows above
   const SuiteRow& fine2 = rows[0];
   const SuiteRow& fine1 = rows[1];
@@ -845,6 +869,20 @@ int main(int argc, char** argv) {
         code != kExitOk)
       return code;
     printMemory(std::cout, columns);
+    return kExitOk;
+  }
+  if (options.scaling) {
+    std::vector<SuiteRow> rows;
+    if (const int code = runGuarded([&] {
+          std::cout << "fp_bench --scaling: the default hand tank by thread count\nmachine: "
+                    << machineDescription() << "\n";
+          for (int threads : options.threads)
+            rows.push_back(runHandTank("hand_tank_r5mm", kHandScene, threads, options.handTime));
+        });
+        code != kExitOk)
+      return code;
+    std::cout << "\n";
+    printScaling(std::cout, rows);
     return kExitOk;
   }
   if (options.suite) {
