@@ -225,6 +225,26 @@ TEST(CliTest, BenchModesReportsAModeWhoseStillRunWentUnstable) {
   EXPECT_NE(text.find("surface: still run: unstable at step"), std::string::npos) << text;
 }
 
+TEST(CliTest, BenchScalingRunsTheDefaultHandTankOncePerThreadCount) {
+  std::istringstream exes(FP_BENCH_EXES);
+  std::string exe;
+  for (std::string e; exes >> e;)
+    if (std::filesystem::path(e).filename() == "fp_bench")
+      exe = e;
+  ASSERT_FALSE(exe.empty());
+  const std::string out = fp::test::tempPath("bench_scaling.out");
+  ASSERT_EQ(
+      std::system((exe + " --scaling --threads 1,2 --hand-time 0.02 > " + out + " 2>/dev/null").c_str()), 0);
+  std::ifstream in(out);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  // the default tank, one row per count, the speed-up over the first
+  EXPECT_NE(text.find("\nhand_tank_r5mm,1,"), std::string::npos) << text;
+  EXPECT_NE(text.find("\nhand_tank_r5mm,2,"), std::string::npos) << text;
+  EXPECT_NE(text.find("  1 threads:"), std::string::npos) << text;
+  EXPECT_NE(text.find("speed-up  1.00"), std::string::npos) << text;
+  EXPECT_NE(text.find("  2 threads:"), std::string::npos) << text;
+}
+
 TEST(CliTest, SetIsCheckedByTheParameterTable) {
   const CliOptions o =
       parseCommandLine({"--set", "dt_max=0.002", "--set", "gravity=0,-5,0", "--set=warm_start=0"});
