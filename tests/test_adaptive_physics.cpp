@@ -153,7 +153,8 @@ RestingTank restingTank(const std::string& file, double uniformHighSurface) {
 TEST(AdaptivePhysicsTest, HandTankAtRestStopsChurningAndStandsNearUniformHigh) {
   // r = 7.9 mm; uniform-high's surface there at 1.5 s: 0.1308 m (deterministic, a run of 5984 particles)
   const RestingTank t = restingTank("hand_tank_coarse.json", 0.1308);
-  // measured 1.93 and 15.4 (bounds 2.5 and 30); the surface 6.6 mm above (bound 7 mm: 5.5 mm when the
+  // measured 1.64 and 13.5 in session 15 (bounds 2.5 and 30; 1.93 and 15.4 in an earlier session);
+  // the surface 6.7 mm above (bound 7 mm: 5.5 mm when the
   // hysteresis came, 7.3 mm before it; 6.4 mm on cd6cdab, before the divergence solve's warm start skipped
   // particles with fewer than 20 neighbours: the figure moves by tenths of a millimetre with any change to
   // the solver's trajectory)

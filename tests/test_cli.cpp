@@ -233,8 +233,11 @@ TEST(CliTest, BenchScalingRunsTheDefaultHandTankOncePerThreadCount) {
       exe = e;
   ASSERT_FALSE(exe.empty());
   const std::string out = fp::test::tempPath("bench_scaling.out");
-  ASSERT_EQ(
-      std::system((exe + " --scaling --threads 1,2 --hand-time 0.02 > " + out + " 2>/dev/null").c_str()), 0);
+  const std::string csvPath = fp::test::tempPath("bench_scaling.csv");
+  std::filesystem::remove(csvPath);
+  const std::string run =
+      exe + " --scaling --threads 1,2 --hand-time 0.02 --csv " + csvPath + " > " + out + " 2>/dev/null";
+  ASSERT_EQ(std::system(run.c_str()), 0) << run;
   std::ifstream in(out);
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   // the default tank, one row per count, the speed-up over the first
@@ -243,6 +246,17 @@ TEST(CliTest, BenchScalingRunsTheDefaultHandTankOncePerThreadCount) {
   EXPECT_NE(text.find("  1 threads:"), std::string::npos) << text;
   EXPECT_NE(text.find("speed-up  1.00"), std::string::npos) << text;
   EXPECT_NE(text.find("  2 threads:"), std::string::npos) << text;
+  std::ifstream csv(csvPath);
+  std::vector<std::string> lines;
+  for (std::string line; std::getline(csv, line);)
+    lines.push_back(line);
+  ASSERT_EQ(lines.size(), 3u);
+  EXPECT_EQ(lines[1].rfind("hand_tank_r5mm,1,", 0), 0u) << lines[1];
+  EXPECT_EQ(lines[2].rfind("hand_tank_r5mm,2,", 0), 0u) << lines[2];
+  // one mode a run
+  const int both = std::system((exe + " --suite --scaling > /dev/null 2>&1").c_str());
+  ASSERT_TRUE(WIFEXITED(both));
+  EXPECT_EQ(WEXITSTATUS(both), kExitUsage);
 }
 
 TEST(CliTest, SetIsCheckedByTheParameterTable) {
