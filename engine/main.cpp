@@ -33,7 +33,7 @@ int runWindow(CliOptions options) {
     // the rasteriser draws on the simulation's cores: the r = 5 mm tank ran at 0.66 of real time there
     options.scenePath = softwareGlScenePath();
     if (!options.quiet) {
-      std::cout << "software OpenGL: the coarse hand tank (r = 7.9 mm) keeps real time here; --scene "
+      std::cout << "software OpenGL: the coarse hand tank (r = 7.9 mm), nearer real time here; --scene "
                    "assets/scenes/hand_tank.json plays at r = 5 mm\n";
     }
   }
