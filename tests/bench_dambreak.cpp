@@ -652,6 +652,20 @@ void writeSuiteCsv(std::ostream& out, const std::vector<SuiteRow>& rows) {
   }
 }
 
+/// --csv FILE of --suite and --scaling ("" writes none): kExitOk, or kExitInput when the file cannot be
+/// written
+int writeSuiteCsvFile(const std::string& path, const std::vector<SuiteRow>& rows) {
+  if (path.empty())
+    return kExitOk;
+  std::ofstream csv(path);
+  writeSuiteCsv(csv, rows);
+  if (!csv) {
+    std::cerr << "fp_bench: " << path << ": cannot write the CSV\n";
+    return kExitInput;
+  }
+  return kExitOk;
+}
+
 void printSuiteTable(std::ostream& out, const std::vector<SuiteRow>& rows) {
   std::vector<std::size_t> width;
   for (const auto& [name, get] : suiteColumns()) {
@@ -889,15 +903,7 @@ int main(int argc, char** argv) {
       return code;
     std::cout << "\n";
     printScaling(std::cout, rows);
-    if (!options.csvPath.empty()) {
-      std::ofstream csv(options.csvPath);
-      writeSuiteCsv(csv, rows);
-      if (!csv) {
-        std::cerr << "fp_bench: " << options.csvPath << ": cannot write the CSV\n";
-        return kExitInput;
-      }
-    }
-    return kExitOk;
+    return writeSuiteCsvFile(options.csvPath, rows);
   }
   if (options.suite) {
     const double damTime = options.simTime.value_or(kDefaultSimTime);
@@ -925,15 +931,7 @@ int main(int argc, char** argv) {
       return code;
     std::cout << "\n";
     printSuite(std::cout, rows, damTime);
-    if (!options.csvPath.empty()) {
-      std::ofstream csv(options.csvPath);
-      writeSuiteCsv(csv, rows);
-      if (!csv) {
-        std::cerr << "fp_bench: " << options.csvPath << ": cannot write the CSV\n";
-        return kExitInput;
-      }
-    }
-    return kExitOk;
+    return writeSuiteCsvFile(options.csvPath, rows);
   }
   const std::string scenePath = options.scene.value_or(options.quick ? kQuickScene : kDefaultScene);
   const double simTime = options.simTime.value_or(options.quick ? kQuickSimTime : kDefaultSimTime);

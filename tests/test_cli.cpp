@@ -204,14 +204,23 @@ TEST(CliTest, TheBenchmarksShareTheCommandLine) {
   }
 }
 
+namespace {
+
+/// the path of one benchmark executable of FP_BENCH_EXES by its file name, "" if it is not there
+std::string benchExe(const std::string& name) {
+  std::istringstream exes(FP_BENCH_EXES);
+  for (std::string e; exes >> e;)
+    if (std::filesystem::path(e).filename() == name)
+      return e;
+  return "";
+}
+
+}  // namespace
+
 TEST(CliTest, BenchModesReportsAModeWhoseStillRunWentUnstable) {
   // The still run that measures a mode's resting level goes unstable (every falling particle is above
   // max_speed): a row that says so and exit code 4, not an abort from an uncaught exception.
-  std::istringstream exes(FP_BENCH_EXES);
-  std::string exe;
-  for (std::string e; exes >> e;)
-    if (std::filesystem::path(e).filename() == "fp_bench_modes")
-      exe = e;
+  const std::string exe = benchExe("fp_bench_modes");
   ASSERT_FALSE(exe.empty());
   const std::string out = fp::test::tempPath("bench_modes_unstable.out");
   const int status =
@@ -226,11 +235,7 @@ TEST(CliTest, BenchModesReportsAModeWhoseStillRunWentUnstable) {
 }
 
 TEST(CliTest, BenchScalingRunsTheDefaultHandTankOncePerThreadCount) {
-  std::istringstream exes(FP_BENCH_EXES);
-  std::string exe;
-  for (std::string e; exes >> e;)
-    if (std::filesystem::path(e).filename() == "fp_bench")
-      exe = e;
+  const std::string exe = benchExe("fp_bench");
   ASSERT_FALSE(exe.empty());
   const std::string out = fp::test::tempPath("bench_scaling.out");
   const std::string csvPath = fp::test::tempPath("bench_scaling.csv");
