@@ -29,8 +29,9 @@ ParamTable::ParamTable() : ParamTableOf<SimParams>("parameter", &ParamTable::val
   add("dt_max", "time", "s", 1e-5, 0.05, live, "largest time step", &P::dtMax, 0.005);
   add("dt_min", "time", "s", 1e-7, 0.01, live, "smallest time step", &P::dtMin, 1e-5);
   add("initial_relaxation", "time", "steps", 0, 1000, onReset,
-      "damped steps settling the coarsened start of the modes with coarse particles", &P::initialRelaxation,
-      20);
+      "damped steps settling the start in every mode (water at rest under its own weight; fluid blocks then "
+      "take their initial velocities)",
+      &P::initialRelaxation, 20);
   add("time_levels", "time stepping", "-", 1, 2, live,
       "1: one time step for all; 2: particles whose own CFL allows twice the step (and their neighbours') "
       "skip the solves every other step and drift (docs/method.md, Time levels)",

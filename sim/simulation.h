@@ -157,6 +157,8 @@ class Simulation {
                              const std::vector<Eigen::Vector3i>& counts);
   void computeLevels(bool smooth);
   void relax(int steps);
+  /// every particle at the initial velocity of its fluid block (after the settling held them still)
+  void restoreBlockVelocities();
   AdaptivityStats adaptResolution(bool ignoreDelay);
   void updateColliders();
   void searchNeighbors();
