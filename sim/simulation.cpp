@@ -207,10 +207,17 @@ void Simulation::relax(int steps) {
   // the adaptive modes start with a slosh of their own. A lattice of fine particles holds no pressure yet: a
   // dam-break column unsettled stands still for some 30 ms while gravity compresses it, and its surge front
   // then trailed the settled adaptive modes' by up to 8 % (AdaptivePhysicsTest.DamBreakSurgeFrontFollows-
-  // UniformHigh). Time, counters and impulses start afresh.
+  // UniformHigh). Time, counters and impulses start afresh; the particles then take back the velocities
+  // their fluid blocks gave them.
+  std::vector<Vec3> initialById;  // by particle id: the velocity createFluid gave it
   if (steps > 0) {
-    for (Vec3& v : m_fluid.v)
-      v.setZero();
+    for (std::size_t i = 0; i < m_fluid.size(); ++i) {
+      const std::uint32_t id = m_fluid.id[i];
+      if (id >= initialById.size())
+        initialById.resize(std::size_t(id) + 1, Vec3::Constant(std::numeric_limits<Real>::quiet_NaN()));
+      initialById[id] = m_fluid.v[i];
+      m_fluid.v[i].setZero();
+    }
   }
   for (int k = 0; k < steps; ++k) {
     step();
@@ -219,7 +226,7 @@ void Simulation::relax(int steps) {
       v.setZero();
   }
   if (steps > 0)
-    restoreBlockVelocities();
+    restoreInitialVelocities(initialById);
   std::fill(m_fluid.splitTime.begin(), m_fluid.splitTime.end(), Real(-1));
   std::fill(m_fluid.parentId.begin(), m_fluid.parentId.end(), kNoParent);
   for (std::uint32_t& f : m_fluid.flags)
@@ -235,26 +242,39 @@ void Simulation::relax(int steps) {
   m_run = RunStats{};
 }
 
-void Simulation::restoreBlockVelocities() {
+void Simulation::restoreInitialVelocities(const std::vector<Vec3>& initialById) {
   const auto moving = [](const FluidBlock& b) { return !b.velocity.isZero(0.0); };
   if (std::none_of(m_scene.fluid.begin(), m_scene.fluid.end(), moving))
     return;
-  // each particle takes the velocity of the block it lies in, or of the nearest one when the settling moved
-  // it out (the first of equals, so the result does not depend on anything but the positions)
+  const auto initial = [&](std::uint32_t id, Vec3& v) {
+    if (id >= initialById.size() || !initialById[id].allFinite())
+      return false;
+    v = initialById[id];
+    return true;
+  };
+  // A particle that existed before the settling takes its own velocity back (the uniform modes keep every
+  // id; a merge keeps the receiver's), a child split during the settling its parent's. Any other takes the
+  // velocity of the block it lies deepest in, or of the nearest one outside all (the first of equals): blocks
+  // that touch share a face, where a distance alone cannot tell them apart.
   parallelFor(tbb::blocked_range<std::size_t>(0, m_fluid.size(), 4096),
               [&](const tbb::blocked_range<std::size_t>& r) {
                 for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                  Vec3& v = m_fluid.v[i];
+                  if (initial(m_fluid.id[i], v) || initial(m_fluid.parentIdOf(i), v))
+                    continue;
                   const Vec3d x = m_fluid.x[i].cast<double>();
-                  double nearest = std::numeric_limits<double>::infinity();
-                  Vec3d v = Vec3d::Zero();
+                  double best = std::numeric_limits<double>::infinity();  // less is better
+                  Vec3d chosen = Vec3d::Zero();
                   for (const FluidBlock& b : m_scene.fluid) {
-                    const double d = b.box.squaredExteriorDistance(x);
-                    if (d < nearest) {
-                      nearest = d;
-                      v = b.velocity;
+                    // inside: minus the depth (distance to the nearest face); outside: the distance
+                    const double depth = std::min((x - b.box.min()).minCoeff(), (b.box.max() - x).minCoeff());
+                    const double score = depth >= 0.0 ? -depth : std::sqrt(b.box.squaredExteriorDistance(x));
+                    if (score < best) {
+                      best = score;
+                      chosen = b.velocity;
                     }
                   }
-                  m_fluid.v[i] = v.cast<Real>();
+                  v = chosen.cast<Real>();
                 }
               });
 }

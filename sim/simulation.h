@@ -157,8 +157,9 @@ class Simulation {
                              const std::vector<Eigen::Vector3i>& counts);
   void computeLevels(bool smooth);
   void relax(int steps);
-  /// every particle at the initial velocity of its fluid block (after the settling held them still)
-  void restoreBlockVelocities();
+  /// every particle at the velocity createFluid gave it (`initialById`, NaN for none), after the settling
+  /// held them still; see the .cpp for particles created during the settling
+  void restoreInitialVelocities(const std::vector<Vec3>& initialById);
   AdaptivityStats adaptResolution(bool ignoreDelay);
   void updateColliders();
   void searchNeighbors();

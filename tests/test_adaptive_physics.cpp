@@ -367,6 +367,52 @@ TEST(AdaptivePhysicsTest, FluidBlocksKeepTheirInitialVelocityThroughTheSettlingI
     EXPECT_NEAR(px, momentumX.front(), 0.02 * std::abs(momentumX.front()) + 1e-3);
 }
 
+TEST(AdaptivePhysicsTest, TouchingFluidBlocksKeepEachParticlesOwnVelocityThroughTheSettling) {
+  // Two blocks whose lattices meet one spacing apart (as the shear layer of PhysicsTest.Laminar...), sliding
+  // past each other, no gravity: after the settling every particle of the uniform modes moves exactly as in
+  // the unsettled build (same ids), whichever side of the face round-off put it.
+  SceneDesc scene;
+  scene.params.particleRadius = 0.008;
+  scene.params.gravity = {0.0, 0.0, 0.0};
+  scene.domain = Aabb(Vec3d(-0.2, -0.2, -0.2), Vec3d(0.2, 0.2, 0.2));
+  scene.fluid.push_back(
+      FluidBlock{Aabb(Vec3d(-0.08, -0.064, -0.048), Vec3d(0.08, 0.0, 0.048)), Vec3d(0.2, 0, 0)});
+  scene.fluid.push_back(
+      FluidBlock{Aabb(Vec3d(-0.08, -0.016, -0.048), Vec3d(0.08, 0.08, 0.048)), Vec3d(-0.2, 0, 0)});
+  for (AdaptivityMode mode : {AdaptivityMode::UniformHigh, AdaptivityMode::UniformLow,
+                              AdaptivityMode::Surface, AdaptivityMode::FluidPlaying}) {
+    SCOPED_TRACE(modeName(mode));
+    scene.mode = mode;
+    SceneDesc bare = scene;
+    bare.params.initialRelaxation = 0;
+    const Simulation settled(scene), unsettled(bare);
+    const bool uniform = mode == AdaptivityMode::UniformHigh || mode == AdaptivityMode::UniformLow;
+    if (uniform) {
+      std::vector<Vec3> byId;
+      for (std::size_t i = 0; i < unsettled.particles().size(); ++i) {
+        const std::uint32_t id = unsettled.particles().id[i];
+        byId.resize(std::max<std::size_t>(byId.size(), std::size_t(id) + 1), Vec3::Zero());
+        byId[id] = unsettled.particles().v[i];
+      }
+      ASSERT_EQ(settled.particles().size(), unsettled.particles().size());
+      for (std::size_t i = 0; i < settled.particles().size(); ++i) {
+        const std::uint32_t id = settled.particles().id[i];
+        ASSERT_LT(id, byId.size());
+        ASSERT_EQ(settled.particles().v[i], byId[id]) << "particle id " << id;
+      }
+    }
+    // The adaptive modes merge and share mass across the face while they settle, and a particle then moves
+    // at its own block's velocity with the mass it received from the other: measured 16-17 % of the start's
+    // momentum in this small blob (every particle within a few supports of the face). A known limit
+    // (docs/method.md); before session 16 they lost all of it.
+    const double mass = settled.totalMass();
+    EXPECT_NEAR(settled.totalMomentum().x(), unsettled.totalMomentum().x(),
+                (uniform ? 1e-6 : 0.2) * std::abs(unsettled.totalMomentum().x()));
+    // the blocks are not equal: the start has momentum, which a lost velocity would change
+    EXPECT_GT(std::abs(unsettled.totalMomentum().x()), 0.05 * 0.2 * mass);
+  }
+}
+
 TEST(AdaptivePhysicsTest, AdaptiveRunsSmallAreDeterministicAcrossThreadCounts) {
   SceneDesc scene =
       tankScene(Vec3d(0.15, 0.15, 0.08), Vec3d(-0.15, 0.0, -0.08), Vec3d(0.0, 0.2, 0.08), 0.008);
