@@ -201,14 +201,14 @@ Simulation::Simulation(const SceneDesc& scene) : m_scene(scene), m_params(scene.
 }
 
 void Simulation::relax(int steps) {
-  // Damped settling (velocities zeroed after every step, colliders held at their t = 0 pose), in every mode,
-  // so that every mode starts from water at rest under its own weight. A coarsened lattice is not at rest
-  // where fine and coarse particles meet, nor at walls, which coarse particles keep farther from: without it
-  // the adaptive modes start with a slosh of their own. A lattice of fine particles holds no pressure yet: a
-  // dam-break column unsettled stands still for some 30 ms while gravity compresses it, and its surge front
-  // then trailed the settled adaptive modes' by up to 8 % (AdaptivePhysicsTest.DamBreakSurgeFrontFollows-
-  // UniformHigh). Time, counters and impulses start afresh; the particles then take back the velocities
-  // their fluid blocks gave them.
+  // Damped settling (velocities zeroed after every step, colliders held still at their t = 0 pose), in every
+  // mode, so that every mode starts from water at rest under its own weight. A coarsened lattice is not at
+  // rest where fine and coarse particles meet, nor at walls, which coarse particles keep farther from:
+  // without it the adaptive modes start with a slosh of their own. A lattice of fine particles holds no
+  // pressure yet: a dam-break column unsettled stands still for some 30 ms while gravity compresses it, and
+  // its surge front then trailed the settled adaptive modes' by up to 8 %
+  // (AdaptivePhysicsTest.DamBreakSurgeFrontFollows- UniformHigh). Time, counters and impulses start afresh;
+  // the particles then take back the velocities their fluid blocks gave them.
   std::vector<Vec3> initialById;  // by particle id: the velocity createFluid gave it
   if (steps > 0) {
     for (std::size_t i = 0; i < m_fluid.size(); ++i) {
@@ -219,12 +219,15 @@ void Simulation::relax(int steps) {
       m_fluid.v[i].setZero();
     }
   }
+  m_settling = true;
   for (int k = 0; k < steps; ++k) {
     step();
     m_time = 0.0;
     for (Vec3& v : m_fluid.v)
       v.setZero();
   }
+  m_settling = false;
+  updateColliders();
   if (steps > 0)
     restoreInitialVelocities(initialById);
   std::fill(m_fluid.splitTime.begin(), m_fluid.splitTime.end(), Real(-1));
@@ -495,8 +498,9 @@ void Simulation::updateColliders() {
         angle > 0.0 ? Quatd(Eigen::AngleAxisd(angle, d.angularVelocity.normalized())) : Quatd::Identity();
     c.orientation = (spin * d.orientation).normalized();
     c.position = d.position + d.linearVelocity * m_time;
-    c.linearVelocity = d.linearVelocity;
-    c.angularVelocity = d.angularVelocity;
+    // held still while the start settles (relax): at its start pose and at rest, not stirring the water
+    c.linearVelocity = m_settling ? Vec3d::Zero() : d.linearVelocity;
+    c.angularVelocity = m_settling ? Vec3d::Zero() : d.angularVelocity;
   }
   if (m_boundary.size() > m_boundary.staticCount())
     m_boundary.updateKinematic(m_colliders);
