@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <tuple>
 
 #include "sim/kernels.h"
 #include "sim/parallel.h"
@@ -219,7 +220,17 @@ void Simulation::relax(int steps) {
       m_fluid.v[i].setZero();
     }
   }
+  // kinematic colliders are held still by updateColliders(); driven ones (the hand) keep what was set from
+  // outside, so their velocities are held at zero here and given back after
   m_settling = true;
+  std::vector<std::pair<Vec3d, Vec3d>> drivenVelocities;
+  for (ColliderState& c : m_colliders) {
+    drivenVelocities.emplace_back(c.linearVelocity, c.angularVelocity);
+    if (c.desc.driven && steps > 0) {
+      c.linearVelocity.setZero();
+      c.angularVelocity.setZero();
+    }
+  }
   for (int k = 0; k < steps; ++k) {
     step();
     m_time = 0.0;
@@ -227,6 +238,10 @@ void Simulation::relax(int steps) {
       v.setZero();
   }
   m_settling = false;
+  for (std::size_t c = 0; c < m_colliders.size(); ++c) {
+    if (m_colliders[c].desc.driven)
+      std::tie(m_colliders[c].linearVelocity, m_colliders[c].angularVelocity) = drivenVelocities[c];
+  }
   updateColliders();
   if (steps > 0)
     restoreInitialVelocities(initialById);
@@ -256,9 +271,10 @@ void Simulation::restoreInitialVelocities(const std::vector<Vec3>& initialById) 
     return true;
   };
   // A particle that existed before the settling takes its own velocity back (the uniform modes keep every
-  // id; a merge keeps the receiver's), a child split during the settling its parent's. Any other takes the
-  // velocity of the block it lies deepest in, or of the nearest one outside all (the first of equals): blocks
-  // that touch share a face, where a distance alone cannot tell them apart.
+  // id; a merge keeps the receiver's); a child split during the settling takes its parent's while it still
+  // links to it (split_blend_steps > 0, for that many steps; by default children keep no link). Any other
+  // takes the velocity of the block it lies deepest in, or of the nearest one outside all (the first of
+  // equals): blocks that touch share a face, where a distance alone cannot tell them apart.
   parallelFor(tbb::blocked_range<std::size_t>(0, m_fluid.size(), 4096),
               [&](const tbb::blocked_range<std::size_t>& r) {
                 for (std::size_t i = r.begin(); i < r.end(); ++i) {

@@ -207,8 +207,9 @@ TEST(PhysicsTest, CollidingBlocksSmallConserveMomentumWithoutWalls) {
     sim.step();
   EXPECT_LT((sim.totalMomentum() - p0).norm(), 1e-5 * scale) << (sim.totalMomentum() - p0).transpose();
   // The blocks did collide and push each other: the first block has given up most of its x-momentum
-  // (measured: 3.53 -> 1.25 kg m/s from the bare lattice, 3.53 -> 1.40 settled), which a pressure solve that never acts (the blocks passing through each
-  // other) would not do. (The density solve needs only its minimum of 2 iterations a step here.)
+  // (measured: 3.53 -> 1.25 kg m/s from the bare lattice, 3.53 -> 1.40 settled), which a pressure solve that
+  // never acts (the blocks passing through each other) would not do. (The density solve needs only its
+  // minimum of 2 iterations a step here.)
   const Vec3d first = firstMomentum();
   EXPECT_LT(first.x(), 0.5 * first0.x());
   std::printf(

@@ -226,11 +226,12 @@ void expectSound(const SoakFigures& f) {
   // 100 bytes a frame would fail the second bound there.) Outside the simulation's arrays the splash and the
   // app's buffers grow with the peak count too, about as much: CI's run of 89762cc, its machine shared with a
   // build, ended at 14.00 MB where the arrays' growth alone allowed 13.86 (peak 9,367 -> 11,902 in the last
-  // seconds, arrays 4.00 -> 5.15 MB); the bound counts that growth twice.
+  // seconds, arrays 4.00 -> 5.15 MB); the bound counts that growth 1.5 times (14.43 MB there; a leak of
+  // 1 KB a frame over its 1,200 frames would still fail it).
   ASSERT_GT(f.countMaxAtStart, 0u);
   const double peakGrowth = double(f.countMax) / double(f.countMaxAtStart);
   EXPECT_LT(f.simBytesEnd, 1.1 * peakGrowth * f.simBytesAfterStart);
-  EXPECT_LT(f.rssEnd, 1.1 * f.rssAfterStart + 2.0 * (peakGrowth - 1.0) * f.simBytesAfterStart);
+  EXPECT_LT(f.rssEnd, 1.1 * f.rssAfterStart + 1.5 * (peakGrowth - 1.0) * f.simBytesAfterStart);
 }
 
 TEST(Soak, ThirtySeconds) {
