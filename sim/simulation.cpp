@@ -6,7 +6,6 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
-#include <tuple>
 
 #include "sim/kernels.h"
 #include "sim/parallel.h"
@@ -208,43 +207,37 @@ void Simulation::relax(int steps) {
   // without it the adaptive modes start with a slosh of their own. A lattice of fine particles holds no
   // pressure yet: a dam-break column unsettled stands still for some 30 ms while gravity compresses it, and
   // its surge front then trailed the settled adaptive modes' by up to 8 %
-  // (AdaptivePhysicsTest.DamBreakSurgeFrontFollows- UniformHigh). Time, counters and impulses start afresh;
+  // (AdaptivePhysicsTest.DamBreakSurgeFrontFollowsUniformHigh). Time, counters and impulses start afresh;
   // the particles then take back the velocities their fluid blocks gave them.
-  std::vector<Vec3> initialById;  // by particle id: the velocity createFluid gave it
   if (steps > 0) {
-    for (std::size_t i = 0; i < m_fluid.size(); ++i) {
-      const std::uint32_t id = m_fluid.id[i];
-      if (id >= initialById.size())
-        initialById.resize(std::size_t(id) + 1, Vec3::Constant(std::numeric_limits<Real>::quiet_NaN()));
-      initialById[id] = m_fluid.v[i];
-      m_fluid.v[i].setZero();
+    const bool moving = std::any_of(m_scene.fluid.begin(), m_scene.fluid.end(),
+                                    [](const FluidBlock& b) { return !b.velocity.isZero(0.0); });
+    // by particle id: the velocity createFluid gave it (NaN for ids it did not create)
+    std::vector<Vec3> initialById;
+    if (moving) {
+      initialById.assign(m_fluid.nextId(), Vec3::Constant(std::numeric_limits<Real>::quiet_NaN()));
+      for (std::size_t i = 0; i < m_fluid.size(); ++i)
+        initialById[m_fluid.id[i]] = m_fluid.v[i];
     }
-  }
-  // kinematic colliders are held still by updateColliders(); driven ones (the hand) keep what was set from
-  // outside, so their velocities are held at zero here and given back after
-  m_settling = true;
-  std::vector<std::pair<Vec3d, Vec3d>> drivenVelocities;
-  for (ColliderState& c : m_colliders) {
-    drivenVelocities.emplace_back(c.linearVelocity, c.angularVelocity);
-    if (c.desc.driven && steps > 0) {
-      c.linearVelocity.setZero();
-      c.angularVelocity.setZero();
+    std::fill(m_fluid.v.begin(), m_fluid.v.end(), Vec3::Zero());
+    m_settling = true;  // updateColliders() holds every moving collider still
+    for (int k = 0; k < steps; ++k) {
+      step();
+      m_time = 0.0;
+      std::fill(m_fluid.v.begin(), m_fluid.v.end(), Vec3::Zero());
     }
+    m_settling = false;
+    // driven colliders (the hand) had no velocity but their scene's before anything set one from outside
+    for (ColliderState& c : m_colliders) {
+      if (c.desc.driven) {
+        c.linearVelocity = c.desc.linearVelocity;
+        c.angularVelocity = c.desc.angularVelocity;
+      }
+    }
+    updateColliders();
+    if (moving)
+      restoreInitialVelocities(initialById);
   }
-  for (int k = 0; k < steps; ++k) {
-    step();
-    m_time = 0.0;
-    for (Vec3& v : m_fluid.v)
-      v.setZero();
-  }
-  m_settling = false;
-  for (std::size_t c = 0; c < m_colliders.size(); ++c) {
-    if (m_colliders[c].desc.driven)
-      std::tie(m_colliders[c].linearVelocity, m_colliders[c].angularVelocity) = drivenVelocities[c];
-  }
-  updateColliders();
-  if (steps > 0)
-    restoreInitialVelocities(initialById);
   std::fill(m_fluid.splitTime.begin(), m_fluid.splitTime.end(), Real(-1));
   std::fill(m_fluid.parentId.begin(), m_fluid.parentId.end(), kNoParent);
   for (std::uint32_t& f : m_fluid.flags)
@@ -261,9 +254,6 @@ void Simulation::relax(int steps) {
 }
 
 void Simulation::restoreInitialVelocities(const std::vector<Vec3>& initialById) {
-  const auto moving = [](const FluidBlock& b) { return !b.velocity.isZero(0.0); };
-  if (std::none_of(m_scene.fluid.begin(), m_scene.fluid.end(), moving))
-    return;
   const auto initial = [&](std::uint32_t id, Vec3& v) {
     if (id >= initialById.size() || !initialById[id].allFinite())
       return false;
@@ -506,6 +496,10 @@ void Simulation::setColliderPose(std::size_t collider, const Vec3d& position, co
 void Simulation::updateColliders() {
   for (ColliderState& c : m_colliders) {
     const ColliderDesc& d = c.desc;
+    if (d.driven && m_settling) {
+      c.linearVelocity.setZero();
+      c.angularVelocity.setZero();
+    }
     if (d.driven || !d.kinematic())
       continue;
     // constant velocities: the pose is a closed-form function of time, so no drift accumulates

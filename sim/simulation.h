@@ -196,7 +196,7 @@ class Simulation {
   std::vector<Real> m_heldRho, m_heldKappa, m_heldKappaV;
   std::size_t m_level1 = 0;
   bool m_heldLastStep = false;
-  bool m_settling = false;  // relax() runs: kinematic colliders are held still (driven ones by relax itself)
+  bool m_settling = false;  // relax() runs: updateColliders() holds kinematic and driven colliders still
   // prepareNeighbors(): the lists are those of the current state; the largest support of their search; the
   // wall time of the search, counted in the next step's neighbour time
   bool m_neighborsCurrent = false;
