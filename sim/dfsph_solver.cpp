@@ -55,7 +55,12 @@ Real cohesion(Real r, Real h) {
 
 }  // namespace
 
-double DfsphSolver::computeDensityAndFactor(SolverContext& ctx) {
+double DfsphSolver::computeDensityAndFactor(SolverContext& ctx, LevelSums* levels) {
+  return levels ? densityAndFactor<true>(ctx, levels) : densityAndFactor<false>(ctx, nullptr);
+}
+
+template <bool kLevelSums>
+double DfsphSolver::densityAndFactor(SolverContext& ctx, LevelSums* levels) {
   ParticleSet& p = ctx.fluid;
   const std::size_t n = p.size();
   m_factor.resize(n);
@@ -78,9 +83,16 @@ double DfsphSolver::computeDensityAndFactor(SolverContext& ctx) {
   const std::uint32_t* bi = ctx.boundaryNbrs.indices.data();
   Real* gF = m_gradF.data();
   Real* gB = m_gradB.data();
+  const Real* rhoBefore = nullptr;
+  if constexpr (kLevelSums) {
+    levels->rawOmega.resize(n);
+    levels->rawNu.resize(n);
+    levels->rhoBefore.assign(p.rho.begin(), p.rho.end());
+    rhoBefore = levels->rhoBefore.data();
+  }
   // One pass evaluates every pair's kernel for the whole step: density, factor, the density rate the
   // divergence solve starts from, and V_j grad W_ij / (x_i - x_j) cached for the solves' ~12 further passes
-  // (positions do not change until the step's end).
+  // (positions do not change until the step's end); on the steps that compute the levels, their sums too.
   return deterministicSum(n, 0.0,
                           [&](std::size_t i) {
                             const Vec3 xi = x[i];
@@ -92,6 +104,10 @@ double DfsphSolver::computeDensityAndFactor(SolverContext& ctx) {
                             Real sqSum = 0;
                             Real rate = 0;
                             Real neighborMass = 0;
+                            // the levels' sums (kLevelSums only)
+                            Vec3 curl = Vec3::Zero();
+                            Real nuSum = 0;
+                            Real weightSum = 0;
                             for (std::uint32_t k = fo[i]; k < fo[i + 1]; ++k) {
                               const std::uint32_t j = fi[k];
                               neighborMass += m[j];
@@ -105,6 +121,13 @@ double DfsphSolver::computeDensityAndFactor(SolverContext& ctx) {
                               const Vec3 gv = vg * xij;
                               gradSum += gv;
                               rate += gv.dot(vi - v[j]);
+                              if constexpr (kLevelSums) {
+                                const Vec3 vji = v[j] - vi;
+                                curl += vji.cross(gv);
+                                const Real wj = m[j] / rhoBefore[j] * w;
+                                nuSum += wj * vji.norm();
+                                weightSum += wj;
+                              }
                               // k_i moves neighbour j by V_i grad W (the pair update is symmetric), so the
                               // second term of alpha is V_i V_j |grad W|^2, not V_j^2 |grad W|^2: the two
                               // differ as soon as masses do, and the latter over-drives heavy particles among
@@ -135,6 +158,16 @@ double DfsphSolver::computeDensityAndFactor(SolverContext& ctx) {
                                         (kMinNeighborsForWarmStart - Real(0.5) - boundaryCount) * m[i];
                             const Real denom = gradSum.squaredNorm() + sqSum;
                             m_factor[i] = denom > kEps ? Real(1) / denom : Real(0);
+                            if constexpr (kLevelSums) {
+                              // curl sums m_j / rho0 (v_j - v_i) x grad W_ij: over rho_i / rho0 it is
+                              // |sum_j m_j (v_j - v_i) x grad W_ij| / rho_i
+                              levels->rawOmega[i] = curl.norm() / density;
+                              // the particle itself is in the denominator (weight m_i / rho_i W(0)), so an
+                              // isolated particle has nu = 0
+                              const Real self = m[i] / (density * rho0) * CubicSpline::w0(Hi);
+                              const Real den = self + weightSum;
+                              levels->rawNu[i] = den > Real(0) ? nuSum / den : Real(0);
+                            }
                             return double(std::max(density - Real(1), Real(0)));
                           }) /
          double(std::max<std::size_t>(n, 1));

@@ -30,12 +30,27 @@ struct SolveResult {
       0.0;  ///< final mean error (density: fraction of rho0; divergence: fraction of rho0 per step)
 };
 
+/// The neighbour sums of the levels (sim/levels.h) that the density pass gathers on the steps that compute
+/// them, from the kernel values it evaluates anyway, so the levels need no kernel pass of their own (issue
+/// 13). The velocity difference weighs a neighbour with its volume m_j / rho_j at the density it had before
+/// this pass (the pass cannot read the densities it writes).
+struct LevelSums {
+  std::vector<Real> rawOmega;   ///< raw vorticity |sum_j m_j (v_j - v_i) x grad W_ij| / rho_i [1/s]
+  std::vector<Real> rawNu;      ///< raw velocity difference sum_j V_j |v_ji| W_ij / sum_(j, i) V_j W_ij [m/s]
+  std::vector<Real> rhoBefore;  ///< the densities before the pass [kg/m^3]
+  /// bytes held
+  std::size_t memoryBytes() const {
+    return (rawOmega.capacity() + rawNu.capacity() + rhoBefore.capacity()) * sizeof(Real);
+  }
+};
+
 /// The DFSPH pressure solver and the non-pressure forces; owns its scratch arrays.
 class DfsphSolver {
  public:
   /// rho_i and the DFSPH factor alpha_i (eq. 11 of Bender & Koschier 2017); returns the mean compression
-  /// max(0, rho/rho0 - 1) over particles
-  double computeDensityAndFactor(SolverContext& ctx);
+  /// max(0, rho/rho0 - 1) over particles. With `levels` it also fills the levels' neighbour sums (resized to
+  /// the particle count) in the same pass.
+  double computeDensityAndFactor(SolverContext& ctx, LevelSums* levels = nullptr);
   /// divergence-free solve (Algorithm 2 of Bender & Koschier 2017) for step size dt
   SolveResult divergenceSolve(SolverContext& ctx, Real dt);
   /// gravity, XSPH viscosity over a step of dtPrevious, laminar viscosity and surface tension (Akinci 2013)
@@ -61,6 +76,8 @@ class DfsphSolver {
   void shrinkToFit();
 
  private:
+  template <bool kLevelSums>
+  double densityAndFactor(SolverContext& ctx, LevelSums* levels);
   /// rate of change of the normalised density from the current velocities into m_rate [1/s], with the
   /// cached pair gradients; stiffness(i, rate) sets m_k[i] and returns i's error; returns the sum of errors
   template <class F>

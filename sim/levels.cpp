@@ -220,7 +220,7 @@ Real LevelEstimator::distanceAt(const ParticleSet& p, std::size_t i, const Neigh
 }
 
 bool LevelEstimator::distancePass(ParticleSet& p, const NeighborList& fluidNbrs, Real cap,
-                                  bool smoothDynamics) {
+                                  const Real* rawOmega, const Real* rawNu) {
   const std::size_t n = p.size();
   std::atomic<bool> changed{false};
   parallelFor(Range(0, n, kGrain), [&](const Range& r) {
@@ -229,8 +229,8 @@ bool LevelEstimator::distancePass(ParticleSet& p, const NeighborList& fluidNbrs,
       const Real best = distanceAt(p, i, fluidNbrs, cap);
       local |= best != p.phi[i];
       m_phiNext[i] = best;
-      if (smoothDynamics)
-        smoothDynamicsAt(p, i, fluidNbrs);
+      if (rawOmega)
+        smoothDynamicsAt(p, i, fluidNbrs, rawOmega, rawNu);
     }
     if (local)
       changed = true;
@@ -239,19 +239,20 @@ bool LevelEstimator::distancePass(ParticleSet& p, const NeighborList& fluidNbrs,
   return changed;
 }
 
-void LevelEstimator::smoothDynamicsAt(ParticleSet& p, std::size_t i, const NeighborList& fluidNbrs) const {
+void LevelEstimator::smoothDynamicsAt(ParticleSet& p, std::size_t i, const NeighborList& fluidNbrs,
+                                      const Real* rawOmega, const Real* rawNu) {
   // The raw values are averaged over the kernel (Shepard): the SPH curl of a disordered particle set carries
   // noise of the order of the velocity fluctuation over the support, which the raw values would mistake for
   // vortices.
   const Real self = p.m[i] / p.rho[i] * CubicSpline::w0(p.H[i]);
-  Real omega = self * m_rawOmega[i];
-  Real nu = self * m_rawNu[i];
+  Real omega = self * rawOmega[i];
+  Real nu = self * rawNu[i];
   Real den = self;
   for (std::uint32_t k = fluidNbrs.offsets[i]; k < fluidNbrs.offsets[i + 1]; ++k) {
     const std::uint32_t j = fluidNbrs.indices[k];
     const Real w = p.m[j] / p.rho[j] * CubicSpline::w((p.x[i] - p.x[j]).norm(), pairSupport(p.H[i], p.H[j]));
-    omega += w * m_rawOmega[j];
-    nu += w * m_rawNu[j];
+    omega += w * rawOmega[j];
+    nu += w * rawNu[j];
     den += w;
   }
   p.omega[i] = omega / den;
@@ -260,7 +261,7 @@ void LevelEstimator::smoothDynamicsAt(ParticleSet& p, std::size_t i, const Neigh
 
 void LevelEstimator::compute(ParticleSet& p, const NeighborList& fluidNbrs, const NeighborList& boundaryNbrs,
                              const BoundarySet& boundary, const SimParams& params, AdaptivityMode mode,
-                             Real mFine, std::vector<Real>& target) {
+                             Real mFine, std::vector<Real>& target, const LevelSums* sums) {
   const std::size_t n = p.size();
   const Real r = Real(params.particleRadius);
   const double mBase = double(mFine) * params.massRatio;
@@ -270,11 +271,25 @@ void LevelEstimator::compute(ParticleSet& p, const NeighborList& fluidNbrs, cons
   for (std::size_t i = 0; i < n; ++i)
     wasSurface[i] = p.phi[i] == Real(0);
   // Three passes over the neighbours in all: surface, raw curl and velocity difference; their kernel average
-  // with the first distance pass; the second distance pass.
-  if (dynamic) {
+  // with the first distance pass; the second distance pass. With the density pass's sums (the steps) the
+  // first evaluates no kernel: it is the surface test alone.
+  const Real* rawOmega = nullptr;
+  const Real* rawNu = nullptr;
+  if (dynamic && sums && sums->rawOmega.size() == n && sums->rawNu.size() == n) {
+    detectSurface(p, fluidNbrs, boundaryNbrs, boundary);
+    rawOmega = sums->rawOmega.data();
+    rawNu = sums->rawNu.data();
+  } else if (dynamic) {
+    // (the start's levels and tests: the steps give the sums)
     surfaceAndRawDynamics(p, fluidNbrs, boundaryNbrs, boundary);
+    rawOmega = m_rawOmega.data();
+    rawNu = m_rawNu.data();
   } else {
     detectSurface(p, fluidNbrs, boundaryNbrs, boundary);
+  }
+  if (!dynamic) {
+    rawOmega = nullptr;
+    rawNu = nullptr;
     std::fill(p.omega.begin(), p.omega.end(), Real(0));
     std::fill(p.nu.begin(), p.nu.end(), Real(0));
   }
@@ -285,7 +300,7 @@ void LevelEstimator::compute(ParticleSet& p, const NeighborList& fluidNbrs, cons
   startDistance(p, cap, Real(2) * r, passes);
   // (the first pass always runs: it also averages omega and nu)
   for (int pass = 0; pass < passes; ++pass) {
-    if (!distancePass(p, fluidNbrs, cap, dynamic && pass == 0))
+    if (!distancePass(p, fluidNbrs, cap, pass == 0 ? rawOmega : nullptr, rawNu))
       break;
   }
   // CFL-aware refinement: the fine particles at the surface set the time step (dt = cfl 2 r / v there), and
@@ -313,6 +328,9 @@ void LevelEstimator::compute(ParticleSet& p, const NeighborList& fluidNbrs, cons
   const double fineLimit = params.cflFactor * 2.0 * double(r);
   const double dtTarget =
       surfaceSpeed2 > 0.0 ? std::min(params.dtMax, fineLimit / std::sqrt(surfaceSpeed2)) : params.dtMax;
+  // the own pass's raw values are not kept: the steps' levels use the density pass's sums
+  std::vector<Real>().swap(m_rawOmega);
+  std::vector<Real>().swap(m_rawNu);
   target.resize(n);
   parallelFor(Range(0, n, kGrain), [&](const Range& rg) {
     for (std::size_t i = rg.begin(); i < rg.end(); ++i) {

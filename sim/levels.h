@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "sim/boundary_set.h"
+#include "sim/dfsph_solver.h"
 #include "sim/neighbor_search.h"
 #include "sim/params.h"
 #include "sim/particle_set.h"
@@ -37,10 +38,12 @@ class LevelEstimator {
  public:
   /// Fills flags (kFlagSurface), phi, omega, nu (zero in the surface mode), levelPhi, levelOmega, levelNu of
   /// `p` and the unsmoothed optimal mass of every particle into `target`, from the neighbour lists and
-  /// densities of the current step. `mFine` is the finest mass [kg].
+  /// densities of the current step. `mFine` is the finest mass [kg]. `sums`: the neighbour sums that the
+  /// solver's density pass of this step gathered (DfsphSolver::computeDensityAndFactor), or nullptr, and the
+  /// levels gather them in a pass of their own.
   void compute(ParticleSet& p, const NeighborList& fluidNbrs, const NeighborList& boundaryNbrs,
                const BoundarySet& boundary, const SimParams& params, AdaptivityMode mode, Real mFine,
-               std::vector<Real>& target);
+               std::vector<Real>& target, const LevelSums* sums = nullptr);
 
   /// bytes held
   std::size_t memoryBytes() const;
@@ -49,15 +52,18 @@ class LevelEstimator {
   /// surface flags and the raw (unaveraged) omega and nu, in one pass over the neighbours
   void surfaceAndRawDynamics(ParticleSet& p, const NeighborList& fluidNbrs, const NeighborList& boundaryNbrs,
                              const BoundarySet& boundary);
+
   /// phi = 0 on the surface, the cap where unknown; sets the number of distance passes to run
   void startDistance(ParticleSet& p, Real cap, Real hop, int& passes);
   /// min_j (phi_j + |x_ij|) over the neighbours of i, at most `cap` [m]
   static Real distanceAt(const ParticleSet& p, std::size_t i, const NeighborList& fluidNbrs, Real cap);
-  /// one Jacobi pass of the distance, with the kernel average of omega and nu when `smoothDynamics`;
+  /// one Jacobi pass of the distance, with the kernel average of the raw omega and nu when they are given;
   /// true when some phi changed
-  bool distancePass(ParticleSet& p, const NeighborList& fluidNbrs, Real cap, bool smoothDynamics);
+  bool distancePass(ParticleSet& p, const NeighborList& fluidNbrs, Real cap, const Real* rawOmega,
+                    const Real* rawNu);
   /// omega_i and nu_i: the kernel average of the raw values
-  void smoothDynamicsAt(ParticleSet& p, std::size_t i, const NeighborList& fluidNbrs) const;
+  static void smoothDynamicsAt(ParticleSet& p, std::size_t i, const NeighborList& fluidNbrs,
+                               const Real* rawOmega, const Real* rawNu);
 
   std::vector<Real> m_phiNext;
   std::vector<Real> m_rawOmega;

@@ -458,9 +458,9 @@ void Simulation::coarsenInitialLattice(const std::vector<Eigen::Vector4i>& latti
   m_fluid = std::move(out);
 }
 
-void Simulation::computeLevels(bool smooth) {
+void Simulation::computeLevels(bool smooth, const LevelSums* sums) {
   m_levels.compute(m_fluid, m_fluidNbrs, m_boundaryNbrs, m_boundary, m_params, m_mode, m_latticeMass,
-                   m_target);
+                   m_target, sums);
   const Real mFine = m_latticeMass;
   const Real mBase = baseMass();
   // levels computed every k solver steps move the target as far as k steps of smoothing would
@@ -763,7 +763,17 @@ void Simulation::step() {
     blendTime += seconds(t2, tb);
     t2 = tb;
   }
-  st.densityError = m_solver.computeDensityAndFactor(ctx);
+  // (levels and adaptation need every particle's neighbours: only on synchronised steps)
+  const bool adaptNow =
+      adaptive() && syncStep && m_stepCount % std::uint64_t(std::max(1, m_params.adaptationPeriod)) == 0;
+  // the levels of every levels_period-th adaptation step; the optimal masses are kept in between. Their
+  // neighbour sums come with the density pass.
+  const bool levelsNow = adaptNow && m_stepCount % (std::uint64_t(std::max(1, m_params.adaptationPeriod)) *
+                                                    std::uint64_t(std::max(1, m_params.levelsPeriod))) ==
+                                         0;
+  const bool levelSums =
+      levelsNow && m_mode == AdaptivityMode::FluidPlaying;  // (vorticity, velocity difference)
+  st.densityError = m_solver.computeDensityAndFactor(ctx, levelSums ? &m_levelSums : nullptr);
   restoreHeld(m_fluid.rho, m_heldRho);
   auto t3 = Clock::now();
   st.times.density = seconds(t2, t3);
@@ -774,15 +784,8 @@ void Simulation::step() {
     blendTime += seconds(t3, tb);
     t3 = tb;
   }
-  // (levels and adaptation need every particle's neighbours: only on synchronised steps)
-  const bool adaptNow =
-      adaptive() && syncStep && m_stepCount % std::uint64_t(std::max(1, m_params.adaptationPeriod)) == 0;
-  // the levels of every levels_period-th adaptation step; the optimal masses are kept in between
-  const bool levelsNow = adaptNow && m_stepCount % (std::uint64_t(std::max(1, m_params.adaptationPeriod)) *
-                                                    std::uint64_t(std::max(1, m_params.levelsPeriod))) ==
-                                         0;
   if (levelsNow) {
-    computeLevels(true);
+    computeLevels(true, levelSums ? &m_levelSums : nullptr);
     const auto tl = Clock::now();
     st.times.levels = seconds(t3, tl);
     t3 = tl;
@@ -901,7 +904,8 @@ std::vector<MemoryItem> Simulation::memoryBreakdown() const {
   out.push_back({"neighbour search scratch", m_search.memoryBytes(), m_search.memoryBytes()});
   out.push_back(
       {"solver: per-particle scratch and per-pair caches", m_solver.memoryBytes(), m_solver.memoryBytes()});
-  MemoryItem levels{"levels: scratch and target masses", m_levels.memoryBytes(), m_levels.memoryBytes()};
+  const std::size_t levelBytes = m_levels.memoryBytes() + m_levelSums.memoryBytes();
+  MemoryItem levels{"levels: scratch, the density pass's sums and target masses", levelBytes, levelBytes};
   countVector(levels, m_target);
   out.push_back(levels);
   out.push_back({"adaptivity scratch", m_adaptivity.memoryBytes(), m_adaptivity.memoryBytes()});

@@ -155,7 +155,9 @@ class Simulation {
   void createFluid();
   void coarsenInitialLattice(const std::vector<Eigen::Vector4i>& lattice,
                              const std::vector<Eigen::Vector3i>& counts);
-  void computeLevels(bool smooth);
+  /// the levels and the smoothed optimal masses; `sums`: the level sums of this step's density pass, or
+  /// nullptr
+  void computeLevels(bool smooth, const LevelSums* sums = nullptr);
   void relax(int steps);
   /// every particle at the velocity createFluid gave it (`initialById`, NaN for none), after the settling
   /// held them still; see the .cpp for particles created during the settling
@@ -189,6 +191,7 @@ class Simulation {
   DfsphSolver m_solver;
   AdaptivityMode m_mode = AdaptivityMode::UniformHigh;
   LevelEstimator m_levels;
+  LevelSums m_levelSums;  // gathered by the density pass of the steps that compute the levels
   Adaptivity m_adaptivity;
   std::vector<Real> m_target;
   // time levels (time_levels = 2): particles held this step, and their saved fields
