@@ -83,94 +83,93 @@ double DfsphSolver::densityAndFactor(SolverContext& ctx, LevelSums* levels) {
   const std::uint32_t* bi = ctx.boundaryNbrs.indices.data();
   Real* gF = m_gradF.data();
   Real* gB = m_gradB.data();
-  const Real* rhoBefore = nullptr;
+  [[maybe_unused]] const Real* rhoBefore = nullptr;
   if constexpr (kLevelSums) {
-    levels->rawOmega.resize(n);
-    levels->rawNu.resize(n);
+    levels->curl.resize(n);
+    levels->nuSum.resize(n);
+    levels->weightSum.resize(n);
     levels->rhoBefore.assign(p.rho.begin(), p.rho.end());
     rhoBefore = levels->rhoBefore.data();
   }
   // One pass evaluates every pair's kernel for the whole step: density, factor, the density rate the
   // divergence solve starts from, and V_j grad W_ij / (x_i - x_j) cached for the solves' ~12 further passes
   // (positions do not change until the step's end); on the steps that compute the levels, their sums too.
-  return deterministicSum(n, 0.0,
-                          [&](std::size_t i) {
-                            const Vec3 xi = x[i];
-                            const Vec3 vi = v[i];
-                            const Real Hi = H[i];
-                            const Real Vi = m[i] * invRho0;
-                            Real density = Vi * CubicSpline::w0(Hi);
-                            Vec3 gradSum = Vec3::Zero();
-                            Real sqSum = 0;
-                            Real rate = 0;
-                            Real neighborMass = 0;
-                            // the levels' sums (kLevelSums only)
-                            Vec3 curl = Vec3::Zero();
-                            Real nuSum = 0;
-                            Real weightSum = 0;
-                            for (std::uint32_t k = fo[i]; k < fo[i + 1]; ++k) {
-                              const std::uint32_t j = fi[k];
-                              neighborMass += m[j];
-                              const Vec3 xij = xi - x[j];
-                              Real w, g;
-                              CubicSpline::evaluate(xij.norm(), pairSupport(Hi, H[j]), w, g);
-                              const Real Vj = m[j] * invRho0;
-                              density += Vj * w;
-                              const Real vg = Vj * g;
-                              gF[k] = vg;
-                              const Vec3 gv = vg * xij;
-                              gradSum += gv;
-                              rate += gv.dot(vi - v[j]);
-                              if constexpr (kLevelSums) {
-                                const Vec3 vji = v[j] - vi;
-                                curl += vji.cross(gv);
-                                const Real wj = m[j] / rhoBefore[j] * w;
-                                nuSum += wj * vji.norm();
-                                weightSum += wj;
-                              }
-                              // k_i moves neighbour j by V_i grad W (the pair update is symmetric), so the
-                              // second term of alpha is V_i V_j |grad W|^2, not V_j^2 |grad W|^2: the two
-                              // differ as soon as masses do, and the latter over-drives heavy particles among
-                              // light
-                              // (written so that equal masses give exactly the uniform formula)
-                              sqSum += (Vi / Vj) * gv.squaredNorm();
-                            }
-                            const Real hb = pairSupport(Hi, Hb);
-                            const Real sb = ctx.boundary.volumeScale(Hi);
-                            for (std::uint32_t k = bo[i]; k < bo[i + 1]; ++k) {
-                              const std::uint32_t b = bi[k];
-                              const Vec3 xib = xi - xb[b];
-                              Real w, g;
-                              CubicSpline::evaluate(xib.norm(), hb, w, g);
-                              density += sb * psi[b] * w;
-                              const Real vg = sb * psi[b] * g;
-                              gB[k] = vg;
-                              const Vec3 gv = vg * xib;
-                              gradSum += gv;
-                              rate += gv.dot(vi - ctx.boundary.velocity(b));
-                            }
-                            p.rho[i] = density * rho0;
-                            m_rate[i] = rate;
-                            // the count, with half a neighbour of margin: equal masses give the integer count
-                            // whatever the rounding of their sum
-                            const Real boundaryCount = Real(bo[i + 1] - bo[i]);
-                            m_full[i] = neighborMass >=
-                                        (kMinNeighborsForWarmStart - Real(0.5) - boundaryCount) * m[i];
-                            const Real denom = gradSum.squaredNorm() + sqSum;
-                            m_factor[i] = denom > kEps ? Real(1) / denom : Real(0);
-                            if constexpr (kLevelSums) {
-                              // curl sums m_j / rho0 (v_j - v_i) x grad W_ij: over rho_i / rho0 it is
-                              // |sum_j m_j (v_j - v_i) x grad W_ij| / rho_i
-                              levels->rawOmega[i] = curl.norm() / density;
-                              // the particle itself is in the denominator (weight m_i / rho_i W(0)), so an
-                              // isolated particle has nu = 0
-                              const Real self = m[i] / (density * rho0) * CubicSpline::w0(Hi);
-                              const Real den = self + weightSum;
-                              levels->rawNu[i] = den > Real(0) ? nuSum / den : Real(0);
-                            }
-                            return double(std::max(density - Real(1), Real(0)));
-                          }) /
-         double(std::max<std::size_t>(n, 1));
+  const double compression = deterministicSum(n, 0.0, [&](std::size_t i) {
+    const Vec3 xi = x[i];
+    const Vec3 vi = v[i];
+    const Real Hi = H[i];
+    const Real Vi = m[i] * invRho0;
+    Real density = Vi * CubicSpline::w0(Hi);
+    Vec3 gradSum = Vec3::Zero();
+    Real sqSum = 0;
+    Real rate = 0;
+    Real neighborMass = 0;
+    // the levels' sums (kLevelSums only)
+    [[maybe_unused]] Vec3 curl = Vec3::Zero();
+    [[maybe_unused]] Real nuSum = 0;
+    [[maybe_unused]] Real weightSum = 0;
+    for (std::uint32_t k = fo[i]; k < fo[i + 1]; ++k) {
+      const std::uint32_t j = fi[k];
+      neighborMass += m[j];
+      const Vec3 xij = xi - x[j];
+      Real w, g;
+      CubicSpline::evaluate(xij.norm(), pairSupport(Hi, H[j]), w, g);
+      const Real Vj = m[j] * invRho0;
+      density += Vj * w;
+      const Real vg = Vj * g;
+      gF[k] = vg;
+      const Vec3 gv = vg * xij;
+      gradSum += gv;
+      rate += gv.dot(vi - v[j]);
+      if constexpr (kLevelSums) {
+        const Vec3 vji = v[j] - vi;
+        curl += vji.cross(gv);
+        const Real wj = m[j] / rhoBefore[j] * w;
+        nuSum += wj * vji.norm();
+        weightSum += wj;
+      }
+      // k_i moves neighbour j by V_i grad W (the pair update is symmetric), so the
+      // second term of alpha is V_i V_j |grad W|^2, not V_j^2 |grad W|^2: the two
+      // differ as soon as masses do, and the latter over-drives heavy particles among
+      // light
+      // (written so that equal masses give exactly the uniform formula)
+      sqSum += (Vi / Vj) * gv.squaredNorm();
+    }
+    const Real hb = pairSupport(Hi, Hb);
+    const Real sb = ctx.boundary.volumeScale(Hi);
+    for (std::uint32_t k = bo[i]; k < bo[i + 1]; ++k) {
+      const std::uint32_t b = bi[k];
+      const Vec3 xib = xi - xb[b];
+      Real w, g;
+      CubicSpline::evaluate(xib.norm(), hb, w, g);
+      density += sb * psi[b] * w;
+      const Real vg = sb * psi[b] * g;
+      gB[k] = vg;
+      const Vec3 gv = vg * xib;
+      gradSum += gv;
+      rate += gv.dot(vi - ctx.boundary.velocity(b));
+    }
+    p.rho[i] = density * rho0;
+    m_rate[i] = rate;
+    // the count, with half a neighbour of margin: equal masses give the integer count
+    // whatever the rounding of their sum
+    const Real boundaryCount = Real(bo[i + 1] - bo[i]);
+    m_full[i] = neighborMass >= (kMinNeighborsForWarmStart - Real(0.5) - boundaryCount) * m[i];
+    const Real denom = gradSum.squaredNorm() + sqSum;
+    m_factor[i] = denom > kEps ? Real(1) / denom : Real(0);
+    if constexpr (kLevelSums) {
+      // curl sums m_j / rho0 (v_j - v_i) x grad W_ij
+      levels->curl[i] = rho0 * curl.norm();
+      levels->nuSum[i] = nuSum;
+      levels->weightSum[i] = weightSum;
+    }
+    return double(std::max(density - Real(1), Real(0)));
+  });
+  if constexpr (kLevelSums) {
+    std::vector<Real>().swap(levels->rhoBefore);
+    levels->filled = true;
+  }
+  return compression / double(std::max<std::size_t>(n, 1));
 }
 
 template <class F>

@@ -32,15 +32,18 @@ struct SolveResult {
 
 /// The neighbour sums of the levels (sim/levels.h) that the density pass gathers on the steps that compute
 /// them, from the kernel values it evaluates anyway, so the levels need no kernel pass of their own (issue
-/// 13). The velocity difference weighs a neighbour with its volume m_j / rho_j at the density it had before
-/// this pass (the pass cannot read the densities it writes).
+/// 13). The levels finish them with the densities they see (after a split child's density blending): omega_i
+/// = curl_i / rho_i, nu_i = nuSum_i / (m_i / rho_i W(0, H_i) + weightSum_i). A neighbour's volume is m_j /
+/// rho_j at its density before the pass (the pass writes the densities it would read).
 struct LevelSums {
-  std::vector<Real> rawOmega;   ///< raw vorticity |sum_j m_j (v_j - v_i) x grad W_ij| / rho_i [1/s]
-  std::vector<Real> rawNu;      ///< raw velocity difference sum_j V_j |v_ji| W_ij / sum_(j, i) V_j W_ij [m/s]
-  std::vector<Real> rhoBefore;  ///< the densities before the pass [kg/m^3]
+  std::vector<Real> curl;       ///< |sum_j m_j (v_j - v_i) x grad W_ij| [kg/(m^3 s)]
+  std::vector<Real> nuSum;      ///< sum_j V_j |v_j - v_i| W_ij [m/s]
+  std::vector<Real> weightSum;  ///< sum_j V_j W_ij [-]
+  std::vector<Real> rhoBefore;  ///< the densities before the pass, during it only [kg/m^3]
+  bool filled = false;          ///< set by the density pass, cleared by the levels that use them
   /// bytes held
   std::size_t memoryBytes() const {
-    return (rawOmega.capacity() + rawNu.capacity() + rhoBefore.capacity()) * sizeof(Real);
+    return (curl.capacity() + nuSum.capacity() + weightSum.capacity() + rhoBefore.capacity()) * sizeof(Real);
   }
 };
 

@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cassert>
 #include <cmath>
 
+#include "sim/dfsph_solver.h"
 #include "sim/kernels.h"
 #include "sim/parallel.h"
 
@@ -261,7 +263,7 @@ void LevelEstimator::smoothDynamicsAt(ParticleSet& p, std::size_t i, const Neigh
 
 void LevelEstimator::compute(ParticleSet& p, const NeighborList& fluidNbrs, const NeighborList& boundaryNbrs,
                              const BoundarySet& boundary, const SimParams& params, AdaptivityMode mode,
-                             Real mFine, std::vector<Real>& target, const LevelSums* sums) {
+                             Real mFine, std::vector<Real>& target, LevelSums* sums) {
   const std::size_t n = p.size();
   const Real r = Real(params.particleRadius);
   const double mBase = double(mFine) * params.massRatio;
@@ -275,10 +277,24 @@ void LevelEstimator::compute(ParticleSet& p, const NeighborList& fluidNbrs, cons
   // first evaluates no kernel: it is the surface test alone.
   const Real* rawOmega = nullptr;
   const Real* rawNu = nullptr;
-  if (dynamic && sums && sums->rawOmega.size() == n && sums->rawNu.size() == n) {
+  const bool useSums = dynamic && sums && sums->filled;
+  // sums filled for another particle set are a caller's error (the fallback below would hide it)
+  assert(!useSums || (sums->curl.size() == n && sums->nuSum.size() == n && sums->weightSum.size() == n));
+  if (useSums && sums->curl.size() == n && sums->nuSum.size() == n && sums->weightSum.size() == n) {
     detectSurface(p, fluidNbrs, boundaryNbrs, boundary);
-    rawOmega = sums->rawOmega.data();
-    rawNu = sums->rawNu.data();
+    // finished with the densities of now (a split child's may have been blended since the pass), in place:
+    // curl becomes omega, nuSum becomes nu
+    parallelFor(Range(0, n, kGrain), [&](const Range& rg) {
+      for (std::size_t i = rg.begin(); i < rg.end(); ++i) {
+        sums->curl[i] /= p.rho[i];
+        // the particle itself is in the denominator (weight m_i / rho_i W(0)), so an isolated particle has
+        // nu = 0
+        const Real den = p.m[i] / p.rho[i] * CubicSpline::w0(p.H[i]) + sums->weightSum[i];
+        sums->nuSum[i] = den > Real(0) ? sums->nuSum[i] / den : Real(0);
+      }
+    });
+    rawOmega = sums->curl.data();
+    rawNu = sums->nuSum.data();
   } else if (dynamic) {
     // (the start's levels and tests: the steps give the sums)
     surfaceAndRawDynamics(p, fluidNbrs, boundaryNbrs, boundary);
@@ -328,9 +344,12 @@ void LevelEstimator::compute(ParticleSet& p, const NeighborList& fluidNbrs, cons
   const double fineLimit = params.cflFactor * 2.0 * double(r);
   const double dtTarget =
       surfaceSpeed2 > 0.0 ? std::min(params.dtMax, fineLimit / std::sqrt(surfaceSpeed2)) : params.dtMax;
-  // the own pass's raw values are not kept: the steps' levels use the density pass's sums
+  // the own pass's raw values are not kept (the steps' levels use the density pass's sums), and the sums are
+  // spent
   std::vector<Real>().swap(m_rawOmega);
   std::vector<Real>().swap(m_rawNu);
+  if (sums)
+    sums->filled = false;
   target.resize(n);
   parallelFor(Range(0, n, kGrain), [&](const Range& rg) {
     for (std::size_t i = rg.begin(); i < rg.end(); ++i) {

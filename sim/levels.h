@@ -7,13 +7,14 @@
 #include <vector>
 
 #include "sim/boundary_set.h"
-#include "sim/dfsph_solver.h"
 #include "sim/neighbor_search.h"
 #include "sim/params.h"
 #include "sim/particle_set.h"
 #include "sim/scene.h"
 
 namespace fp::sim {
+
+struct LevelSums;
 
 /// s(x) = clamp((x - lo) / (hi - lo), 0, 1); lo < hi
 double levelRamp(double x, double lo, double hi);
@@ -39,11 +40,11 @@ class LevelEstimator {
   /// Fills flags (kFlagSurface), phi, omega, nu (zero in the surface mode), levelPhi, levelOmega, levelNu of
   /// `p` and the unsmoothed optimal mass of every particle into `target`, from the neighbour lists and
   /// densities of the current step. `mFine` is the finest mass [kg]. `sums`: the neighbour sums that the
-  /// solver's density pass of this step gathered (DfsphSolver::computeDensityAndFactor), or nullptr, and the
-  /// levels gather them in a pass of their own.
+  /// solver's density pass of this step gathered (DfsphSolver::computeDensityAndFactor; used once, then
+  /// marked spent), or nullptr, and the levels gather them in a pass of their own.
   void compute(ParticleSet& p, const NeighborList& fluidNbrs, const NeighborList& boundaryNbrs,
                const BoundarySet& boundary, const SimParams& params, AdaptivityMode mode, Real mFine,
-               std::vector<Real>& target, const LevelSums* sums = nullptr);
+               std::vector<Real>& target, LevelSums* sums = nullptr);
 
   /// bytes held
   std::size_t memoryBytes() const;

@@ -458,7 +458,7 @@ void Simulation::coarsenInitialLattice(const std::vector<Eigen::Vector4i>& latti
   m_fluid = std::move(out);
 }
 
-void Simulation::computeLevels(bool smooth, const LevelSums* sums) {
+void Simulation::computeLevels(bool smooth, LevelSums* sums) {
   m_levels.compute(m_fluid, m_fluidNbrs, m_boundaryNbrs, m_boundary, m_params, m_mode, m_latticeMass,
                    m_target, sums);
   const Real mFine = m_latticeMass;

@@ -157,7 +157,7 @@ class Simulation {
                              const std::vector<Eigen::Vector3i>& counts);
   /// the levels and the smoothed optimal masses; `sums`: the level sums of this step's density pass, or
   /// nullptr
-  void computeLevels(bool smooth, const LevelSums* sums = nullptr);
+  void computeLevels(bool smooth, LevelSums* sums = nullptr);
   void relax(int steps);
   /// every particle at the velocity createFluid gave it (`initialById`, NaN for none), after the settling
   /// held them still; see the .cpp for particles created during the settling

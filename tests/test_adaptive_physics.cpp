@@ -65,8 +65,8 @@ TEST(AdaptivePhysicsTest, TankAtRestStaysStillFineAtTheSurfaceCoarseInside) {
   EXPECT_LT(errorSum / steps, 0.005);
   // still: the water surface stays level (the 99th percentile of the heights: the highest particle alone
   // follows the one droplet the restless fine particles may throw, 0.29-0.34 m over six seeds and a
-  // rounding-level change of the levels; the percentile 0.287-0.294 m), few particles thrown above it, and
-  // the kinetic energy small
+  // rounding-level change of the levels; the percentile 0.287-0.294 m), at most a few droplets above it
+  // (0 or 1 above 0.33 m over those runs), none far, and the kinetic energy small
   std::vector<double> heights;
   int thrown = 0;
   for (std::size_t i = 0; i < p.size(); ++i) {
@@ -76,7 +76,8 @@ TEST(AdaptivePhysicsTest, TankAtRestStaysStillFineAtTheSurfaceCoarseInside) {
   std::sort(heights.begin(), heights.end());
   const double level = heights[std::size_t(0.99 * double(heights.size()))];
   EXPECT_NEAR(level, 0.3, 0.02);
-  EXPECT_LE(double(thrown), 0.01 * double(p.size())) << thrown << " particles above 0.33 m";
+  EXPECT_LE(thrown, 3) << thrown << " particles above 0.33 m";
+  EXPECT_LT(heights.back(), 0.4) << "the highest particle";
   // the rms speed averaged over the last 0.5 s: measured 0.113 m/s (the fastest particle at 1.5 s at 0.57
   // m/s); bound 0.145 (1.28x; it was 0.3 at one instant)
   const double vrms = vrmsSum / steps;
