@@ -277,10 +277,12 @@ void LevelEstimator::compute(ParticleSet& p, const NeighborList& fluidNbrs, cons
   // first evaluates no kernel: it is the surface test alone.
   const Real* rawOmega = nullptr;
   const Real* rawNu = nullptr;
-  const bool useSums = dynamic && sums && sums->filled;
+  const bool given = dynamic && sums && sums->filled;
+  const bool useSums =
+      given && sums->curl.size() == n && sums->nuSum.size() == n && sums->weightSum.size() == n;
   // sums filled for another particle set are a caller's error (the fallback below would hide it)
-  assert(!useSums || (sums->curl.size() == n && sums->nuSum.size() == n && sums->weightSum.size() == n));
-  if (useSums && sums->curl.size() == n && sums->nuSum.size() == n && sums->weightSum.size() == n) {
+  assert(useSums == given);
+  if (useSums) {
     detectSurface(p, fluidNbrs, boundaryNbrs, boundary);
     // finished with the densities of now (a split child's may have been blended since the pass), in place:
     // curl becomes omega, nuSum becomes nu
@@ -302,10 +304,6 @@ void LevelEstimator::compute(ParticleSet& p, const NeighborList& fluidNbrs, cons
     rawNu = m_rawNu.data();
   } else {
     detectSurface(p, fluidNbrs, boundaryNbrs, boundary);
-  }
-  if (!dynamic) {
-    rawOmega = nullptr;
-    rawNu = nullptr;
     std::fill(p.omega.begin(), p.omega.end(), Real(0));
     std::fill(p.nu.begin(), p.nu.end(), Real(0));
   }

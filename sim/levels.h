@@ -53,7 +53,6 @@ class LevelEstimator {
   /// surface flags and the raw (unaveraged) omega and nu, in one pass over the neighbours
   void surfaceAndRawDynamics(ParticleSet& p, const NeighborList& fluidNbrs, const NeighborList& boundaryNbrs,
                              const BoundarySet& boundary);
-
   /// phi = 0 on the surface, the cap where unknown; sets the number of distance passes to run
   void startDistance(ParticleSet& p, Real cap, Real hop, int& passes);
   /// min_j (phi_j + |x_ij|) over the neighbours of i, at most `cap` [m]

@@ -785,7 +785,7 @@ void Simulation::step() {
     t3 = tb;
   }
   if (levelsNow) {
-    computeLevels(true, levelSums ? &m_levelSums : nullptr);
+    computeLevels(true, &m_levelSums);  // (used when the density pass filled them)
     const auto tl = Clock::now();
     st.times.levels = seconds(t3, tl);
     t3 = tl;

@@ -16,6 +16,7 @@
 #include "sim/signed_distance.h"
 #include "sim/simulation.h"
 #include "sim/split_templates.h"
+#include "tests/scene_fixtures.h"
 
 using namespace fp::sim;
 
@@ -534,17 +535,9 @@ TEST(LevelsTest, TheDensityPassSumsGiveTheLevelsOfTheirOwnPassSmall) {
   // with and without the sums, and the levels from the sums those of the levels' own pass: the same surface,
   // omega to round-off, nu and the targets to the difference of the neighbours' volumes (m_j / rho_j at the
   // density before the pass against after it).
-  SceneDesc scene;
+  SceneDesc scene =
+      fp::test::tankScene(Vec3d(0.3, 0.2, 0.1), Vec3d(-0.3, 0, -0.1), Vec3d(-0.1, 0.3, 0.1), 0.008);
   scene.mode = AdaptivityMode::FluidPlaying;
-  scene.params.particleRadius = 0.008;
-  ColliderDesc tank;
-  tank.shape = ShapeType::Box;
-  tank.container = true;
-  tank.halfExtents = Vec3d(0.3, 0.2, 0.1);
-  tank.position = Vec3d(0, 0.2, 0);
-  scene.colliders.push_back(tank);
-  scene.fluid.push_back(FluidBlock{Aabb(Vec3d(-0.3, 0, -0.1), Vec3d(-0.1, 0.3, 0.1)), Vec3d::Zero()});
-  scene.domain = Aabb(Vec3d(-0.35, -0.05, -0.15), Vec3d(0.35, 0.45, 0.15));
   Simulation sim(scene);
   while (sim.time() < 0.15)
     sim.step();
