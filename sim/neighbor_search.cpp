@@ -821,35 +821,9 @@ void NeighborSearch::buildSymmetric(const UniformGrid& grid, const std::vector<V
       }
     }
   });
-  // Both parts ascending: merged from the back, they are build()'s list whatever the thread count.
-  parallelFor(Range(0, n, 256), [&](const Range& r) {
-    std::vector<std::uint32_t> part;
-    for (std::size_t i = r.begin(); i < r.end(); ++i) {
-      std::uint32_t* list = dst + out.offsets[i];
-      const std::size_t a = ownOff[i + 1] - ownOff[i];
-      const std::size_t size = out.offsets[i + 1] - out.offsets[i];
-      if (size == a)
-        continue;
-      // the own list may already end below the first received pair
-      if (a == 0 || list[a - 1] < list[a])
-        continue;
-      part.assign(list + a, list + size);
-      // branch-free while both parts last (the order of the two is a coin toss for the branch predictor)
-      std::size_t ia = a;
-      std::size_t ib = part.size();
-      std::size_t w = size;
-      while (ia > 0 && ib > 0) {
-        const std::uint32_t fromOwn = list[ia - 1];
-        const std::uint32_t fromReceived = part[ib - 1];
-        const bool own = fromOwn > fromReceived;
-        list[--w] = own ? fromOwn : fromReceived;
-        ia -= own;
-        ib -= !own;
-      }
-      while (ib > 0)
-        list[--w] = part[--ib];
-    }
-  });
+  // The two parts are left as they are, each ascending: merging them into build()'s order cost 17 % of this
+  // search on the hand tank at r = 5 mm (3.8 % of a step), and a fixed order is all the sums need to be the
+  // same whatever the thread count.
 }
 
 }  // namespace fp::sim

@@ -183,10 +183,12 @@ class NeighborSearch {
     buildLists(grid, qx, qH, sources, selfSource, maxH, out, false);
   }
 
-  /// The lists of build(grid, x, H, {{x, H, 0, &cells, 0}}, 0, maxH, out), the same in the same order, found
-  /// with less work when sizes are mixed: each point searches only as far as its own support, for the points
-  /// no larger than itself, and receives the pairs with larger points from their searches. `x`, `H` and
-  /// `cells` are the points sorted by UniformGrid::sort; `maxH` their largest support [m].
+  /// The pairs of build(grid, x, H, {{x, H, 0, &cells, 0}}, 0, maxH, out), found with less work when sizes
+  /// are mixed: each point searches only as far as its own support, for the points no larger than itself,
+  /// and receives the pairs with larger points from their searches. Each list holds first the neighbours
+  /// with H_j <= H_i, then those with H_j > H_i, each part in ascending index order: the same lists whatever
+  /// the thread count (build() lists in ascending order throughout). `x`, `H` and `cells` are the points
+  /// sorted by UniformGrid::sort; `maxH` their largest support [m].
   void buildSymmetric(const UniformGrid& grid, const std::vector<Vec3>& x, const std::vector<Real>& H,
                       const std::vector<std::uint32_t>& cells, Real maxH, NeighborList& out);
 

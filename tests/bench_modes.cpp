@@ -46,8 +46,6 @@ constexpr double kDefaultSimTime = 2.0;
 constexpr double kQuickSimTime = 0.3;
 /// the splash height is the height below which this share of the water's mass lies
 constexpr double kHeightFraction = 0.999;
-/// simulated seconds of the still run that gives each mode's resting level
-constexpr double kDefaultRestTime = 0.5;
 /// starting phase between the perturbed runs of a mode: a fraction of a blade's turn [rad]
 constexpr double kPhaseStep = 0.4;
 
@@ -156,28 +154,53 @@ void writePlot(const std::string& path, const std::string& title, const std::str
   f << "</svg>\n";
 }
 
-/// The resting level of a mode: the same scene with every collider held still, run for `restTime`, then the
-/// median of the 99.9 % mass height over the steps of its second half (a median, so that what slosh is left
-/// after the settled start does not shift it). Each mode has its own: coarse particles keep a
-/// larger distance from the floor (the wall holds them at about 2.2 of their own radii), which lifts the
-/// whole water surface by a few fine radii, and that must not count as splash.
-double restingLevel(sim::SceneDesc scene, double restTime) {
+/// A mode's water at rest, frame by frame: the same scene with every collider held still, sampled at the
+/// run's frame times. Each mode has its own: coarse particles keep a larger distance from the floor (the
+/// wall holds them at about 2.2 of their own radii), which lifts the whole water surface by a few fine
+/// radii, and that must not count as splash. And the settled start is not quite at rest: at r = 0.00538 m
+/// uniform-high's still water rose 14 mm over its first 0.5 s and sank back by 1.5 s, so a single resting
+/// level taken early read the propeller's splash as -10 mm. A run's height at a frame is taken above the
+/// still run's at the same frame, which cancels what the start does in both.
+struct StillRun {
+  std::vector<double> frames;  // 99.9 % mass height per frame, a moving median over 5 frames [m]
+  double level = 0;            // the median over the still run's second half [m]
+  /// the still height at `frame`; past the still run's end its resting level
+  double at(std::size_t frame) const { return frame < frames.size() ? frames[frame] : level; }
+};
+
+StillRun stillRun(sim::SceneDesc scene, double restTime) {
   for (sim::ColliderDesc& c : scene.colliders) {
     c.linearVelocity.setZero();
     c.angularVelocity.setZero();
     c.driven = false;
   }
   sim::Simulation simulation(scene);
-  std::vector<double> heights;
-  while (simulation.time() < restTime) {
+  const double frameDt = 1.0 / scene.frameRate;
+  std::vector<double> raw{sim::heightPercentile(simulation.particles(), kHeightFraction)};
+  std::vector<double> late;
+  while (simulation.time() < restTime - 1e-12) {
     simulation.step();
+    const double h = sim::heightPercentile(simulation.particles(), kHeightFraction);
+    // sampled as runMode samples: the first step at or past each frame's time
+    if (simulation.time() >= double(raw.size()) * frameDt - 1e-12)
+      raw.push_back(h);
     if (simulation.time() > 0.5 * restTime)
-      heights.push_back(sim::heightPercentile(simulation.particles(), kHeightFraction));
+      late.push_back(h);
   }
-  if (heights.empty())
-    return sim::heightPercentile(simulation.particles(), kHeightFraction);
-  std::nth_element(heights.begin(), heights.begin() + std::ptrdiff_t(heights.size() / 2), heights.end());
-  return heights[heights.size() / 2];
+  StillRun still;
+  if (late.empty())
+    late.push_back(raw.back());
+  std::nth_element(late.begin(), late.begin() + std::ptrdiff_t(late.size() / 2), late.end());
+  still.level = late[late.size() / 2];
+  // (a median of 5 frames: one frame's percentile jumps by a particle's height as particles cross it)
+  for (std::size_t k = 0; k < raw.size(); ++k) {
+    std::vector<double> window;
+    for (std::size_t q = k > 2 ? k - 2 : 0; q <= std::min(raw.size() - 1, k + 2); ++q)
+      window.push_back(raw[q]);
+    std::nth_element(window.begin(), window.begin() + std::ptrdiff_t(window.size() / 2), window.end());
+    still.frames.push_back(window[window.size() / 2]);
+  }
+  return still;
 }
 
 /// The scene with every spinning collider started `angle` further along its spin [rad]: a perturbed start of
@@ -192,14 +215,14 @@ sim::SceneDesc withStartingPhase(sim::SceneDesc scene, double angle) {
   return scene;
 }
 
-/// One run of one mode, its heights measured above the resting level `rest` [m]. The wall time counts the
-/// simulation only: frame sampling, splash and rendering are timed out.
-Row runMode(sim::SceneDesc scene, sim::AdaptivityMode mode, double simTime, double rest, double imageTime,
-            engine::HeadlessRender* render, sim::SplashParticles* imageSplash) {
+/// One run of one mode, its heights measured above the still water's at the same frame (`still`). The wall
+/// time counts the simulation only: frame sampling, splash and rendering are timed out.
+Row runMode(sim::SceneDesc scene, sim::AdaptivityMode mode, double simTime, const StillRun& still,
+            double imageTime, engine::HeadlessRender* render, sim::SplashParticles* imageSplash) {
   scene.mode = mode;
   Row row;
   row.mode = sim::modeName(mode);
-  row.restLevel = rest;
+  row.restLevel = still.level;
   sim::Simulation simulation(scene);
   sim::SplashGenerator splash;
   int frame = 0;
@@ -213,8 +236,8 @@ Row runMode(sim::SceneDesc scene, sim::AdaptivityMode mode, double simTime, doub
     s.height = sim::heightPercentile(simulation.particles(), kHeightFraction);
     s.heightSplash =
         sim::heightPercentile(simulation.particles(), kHeightFraction, &sp, scene.params.splashCount);
-    s.height -= rest;
-    s.heightSplash -= rest;
+    s.height -= still.at(std::size_t(frame));
+    s.heightSplash -= still.at(std::size_t(frame));
     s.densityError = sim::densityErrorMeans(simulation.particles(), scene.params.restDensity);
     if (simulation.adaptive()) {
       const sim::ParticleSet& p = simulation.particles();
@@ -310,14 +333,14 @@ std::pair<double, double> meanAndSpread(const std::vector<double>& v) {
 }
 
 /// `runs` runs of one mode, the k-th with the spinning colliders' starting phase advanced by k kPhaseStep
-/// (one resting level for all): the figures of the first run, and the splash heights of every run.
+/// (one still run for all): the figures of the first run, and the splash heights of every run.
 Row runModeRepeated(const sim::SceneDesc& scene, sim::AdaptivityMode mode, double simTime, double restTime,
                     double imageTime, engine::HeadlessRender* render, int runs) {
   sim::SceneDesc still = scene;
   still.mode = mode;
-  double rest = 0.0;
+  StillRun rest;
   try {
-    rest = restingLevel(still, restTime);
+    rest = stillRun(still, restTime > 0.0 ? restTime : simTime);
   } catch (const sim::InstabilityError& e) {
     // the mode's still run went unstable: a row that says so (exit code 4), not an abort
     Row row;
@@ -350,7 +373,7 @@ int main(int argc, char** argv) {
   std::string outDir;
   bool images = false;
   double imageTime = -1.0;
-  double restTime = kDefaultRestTime;
+  double restTime = 0.0;  // the still run's length; 0: the run's
   int threads = 0;
   int runs = 1;  // runs per mode with perturbed starts
   std::vector<sim::AdaptivityMode> modes = {sim::AdaptivityMode::UniformLow, sim::AdaptivityMode::UniformHigh,
@@ -406,7 +429,8 @@ int main(int argc, char** argv) {
         "--image-time", [&](double v) { imageTime = v; }, "simulated time of the images");
     line.addPositive(
         "--rest-time", [&](double v) { restTime = v; },
-        "simulated seconds of the still run giving each mode's resting level (default 0.5)");
+        "simulated seconds of the still run whose heights, frame by frame, are each mode's rest (default: "
+        "--sim-time; past its end the median of its second half)");
     app.footer("Exit codes: 0 ok, 2 bad command line, 3 bad scene or output, 4 a mode went unstable.");
   }
   if (const std::optional<int> exit = line.parse(argc, argv))
