@@ -1,6 +1,7 @@
 #include "sim/adaptivity.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 
 #include "sim/kernels.h"
@@ -241,33 +242,82 @@ void Adaptivity::planSplit(const AdaptContext& ctx, SplitPlan& plan) const {
   }
 }
 
+namespace {
+
+/// The most of its mass a receiver takes in one adaptation step. The transfer rate is per solver step: an
+/// adaptation every k steps may move k times as much, but never more than kMaxTransferPerAdaptation of a
+/// receiver's mass at once (a receiver that jumps carries the density error of its jump into the next
+/// pressure solve: at adaptation_period = 100 the first adaptation moved up to 5 times a receiver's mass and
+/// the propeller blew up three steps later).
+double receiverRate(const SimParams& params) {
+  return std::min(params.transferRate * double(std::max(1, params.adaptationPeriod)),
+                  std::max(params.transferRate, kMaxTransferPerAdaptation));
+}
+
+/// A share goes to light neighbours (q < light_below). A merge may also fill neighbours that are nearly right
+/// (q < merge_receivers_below, 1 by default) up to their optimal mass: with light ones only, a too-light
+/// particle among right ones found no room, stayed, and was tried again every step (the hand tank at
+/// r = 5 mm: about 560 failed merges a step, 19 % of its particles staying too light).
+Real receiverBelow(const SimParams& params, bool all) {
+  return Real(all ? params.mergeReceiversBelow : params.lightBelow);
+}
+
+/// Whether fluid particle j may receive from `donor` (locks aside): light enough, and within their pair
+/// support; then `distance` and `room`, j's term of the donor's capacity.
+inline bool receiverRoom(const ParticleSet& p, std::size_t donor, std::uint32_t j, Real below, double rate,
+                         Real& distance, double& room) {
+  if (p.m[j] >= below * p.mOpt[j])
+    return false;
+  distance = (p.x[j] - p.x[donor]).norm();
+  if (distance >= pairSupport(p.H[j], p.H[donor]))
+    return false;
+  room = std::min(double(p.mOpt[j]) - double(p.m[j]), rate * double(p.m[j]));
+  return true;
+}
+
+}  // namespace
+
+namespace {
+std::atomic<bool>& prefilterSetting() {
+  static std::atomic<bool> on(true);
+  return on;
+}
+}  // namespace
+
+bool setAdaptivityPrefilter(bool on) {
+  return prefilterSetting().exchange(on);
+}
+
+double Adaptivity::capacityBound(const AdaptContext& ctx, std::size_t donor, bool all) {
+  const ParticleSet& p = ctx.fluid;
+  const double rate = receiverRate(ctx.params);
+  const Real below = receiverBelow(ctx.params, all);
+  double bound = 0.0;
+  for (std::uint32_t k = ctx.fluidNbrs.offsets[donor]; k < ctx.fluidNbrs.offsets[donor + 1]; ++k) {
+    Real distance;
+    double room;
+    if (receiverRoom(p, donor, ctx.fluidNbrs.indices[k], below, rate, distance, room))
+      bound += std::max(0.0, room);
+  }
+  return bound;
+}
+
 bool Adaptivity::transferMass(const AdaptContext& ctx, std::size_t donor, double amount, bool all) {
   ParticleSet& p = ctx.fluid;
-  const SimParams& params = ctx.params;
   m_candidates.clear();
   double capacity = 0.0;
-  // the transfer rate is per solver step: an adaptation every k steps may move k times as much, but never
-  // more than kMaxTransferPerAdaptation of a receiver's mass at once (a receiver that jumps carries the
-  // density error of its jump into the next pressure solve: at adaptation_period = 100 the first adaptation
-  // moved up to 5 times a receiver's mass and the propeller blew up three steps later)
-  const double rate = std::min(params.transferRate * double(std::max(1, params.adaptationPeriod)),
-                               std::max(params.transferRate, kMaxTransferPerAdaptation));
-  // A share goes to light neighbours (q < light_below). A merge may also fill neighbours that are nearly
-  // right (q < merge_receivers_below, 1 by default) up to their optimal mass: with light ones only, a
-  // too-light particle among right ones found no room, stayed, and was tried again every step (the hand tank
-  // at r = 5 mm: about 560 failed merges a step, 19 % of its particles staying too light).
-  const Real receiverBelow = Real(all ? params.mergeReceiversBelow : params.lightBelow);
+  const double rate = receiverRate(ctx.params);
+  const Real below = receiverBelow(ctx.params, all);
   for (std::uint32_t k = ctx.fluidNbrs.offsets[donor]; k < ctx.fluidNbrs.offsets[donor + 1]; ++k) {
     const std::uint32_t j = ctx.fluidNbrs.indices[k];
     if (m_locked[j] || m_removed[j])
       continue;
-    if (p.m[j] >= receiverBelow * p.mOpt[j])
-      continue;
-    const Real distance = (p.x[j] - p.x[donor]).norm();
-    if (distance >= pairSupport(p.H[j], p.H[donor]))
+    Real distance;
+    double room;
+    if (!receiverRoom(p, donor, j, below, rate, distance, room))
       continue;
     m_candidates.emplace_back(distance, j);
-    capacity += std::min(double(p.mOpt[j]) - double(p.m[j]), rate * double(p.m[j]));
+    capacity += room;
   }
   // (a merge whose receivers have room for all but round-off of the donor goes ahead: see below)
   if (m_candidates.empty() || capacity <= 0.0 || (all && capacity < amount * (1.0 - 1e-9)))
@@ -335,22 +385,64 @@ AdaptivityStats Adaptivity::adapt(const AdaptContext& ctx, bool ignoreDelay) {
   const SimParams& params = ctx.params;
   const std::size_t n = p.size();
   AdaptivityStats stats;
-  m_locked.assign(n, 0);
-  m_removed.assign(n, 0);
+  m_locked.resize(n);
+  m_removed.resize(n);
   m_ops.resize(n);
-  for (std::size_t i = 0; i < n; ++i)
-    m_ops[i] = ParticleOps{p.id[i], 0, 0};
+  m_kind.resize(n);
 
   auto ratio = [&](std::size_t i) { return p.m[i] / p.mOpt[i]; };
+  // share: a heavy particle gives half its excess to light neighbours, once its mass leaves the band of the
+  // targets' hysteresis (kTargetBand in sim/levels.cpp, 0.3): within it the particle is as close to its
+  // target as the target is to the levels, and sharing would only churn water at rest
+  constexpr double kTargetBand = 0.3;
+  const Real shareAbove = Real(std::max(params.shareAbove, 1.0 + kTargetBand));
   // the split delay counts solver steps, whatever the adaptation period
   const std::uint32_t period = std::uint32_t(std::max(1, params.adaptationPeriod));
-  parallelFor(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t i = r.begin(); i < r.end(); ++i)
-      p.heavySteps[i] = ratio(i) >= Real(params.splitAbove) ? p.heavySteps[i] + period : 0;
+  // One parallel pass finds the particles each operation below may take. The merges and shares then run in
+  // order, each changing only particles it locks, so a particle that is not locked keeps its mass, place and
+  // support, and a donor's capacity only loses terms as they proceed. A donor whose capacity at the start
+  // (its non-negative terms; floating-point sums of non-negative terms only grow with more terms) is already
+  // too small would fail without changing anything, so leaving it out gives the same result; the serial
+  // passes visit only the others. (The hand tank at r = 5 mm: the serial merges cost more at two threads
+  // than at one, as they read what the other core wrote.)
+  const bool prefilter = prefilterSetting().load();
+  std::atomic<std::size_t> leftOut{0};
+  parallelFor(tbb::blocked_range<std::size_t>(0, n, 512), [&](const tbb::blocked_range<std::size_t>& r) {
+    std::size_t dropped = 0;
+    for (std::size_t i = r.begin(); i < r.end(); ++i) {
+      m_locked[i] = 0;
+      m_removed[i] = 0;
+      m_ops[i] = ParticleOps{p.id[i], 0, 0};
+      const Real q = ratio(i);
+      p.heavySteps[i] = q >= Real(params.splitAbove) ? p.heavySteps[i] + period : 0;
+      std::uint8_t kind = 0;
+      if (q < Real(params.mergeBelow)) {
+        if (!prefilter || capacityBound(ctx, i, true) >= double(p.m[i]) * (1.0 - 1e-9))
+          kind |= kMayMerge;
+        else
+          ++dropped;
+      }
+      if (q >= Real(params.splitAbove) &&
+          (ignoreDelay || p.heavySteps[i] >= std::uint32_t(params.splitDelay)))
+        kind |= kMaySplit;
+      if (q >= shareAbove) {
+        if (!prefilter || capacityBound(ctx, i, false) > 0.0)
+          kind |= kMayShare;
+        else
+          ++dropped;
+      }
+      m_kind[i] = kind;
+    }
+    leftOut += dropped;
   });
+  m_leftOut = leftOut.load();
+  auto select = [&](std::uint8_t kind) {
+    parallelSelect(n, 4096, m_selected, [&](std::size_t i) { return (m_kind[i] & kind) != 0; });
+  };
 
   // merge n:(n-1): a too-light particle goes into its nearest light neighbours
-  for (std::size_t i = 0; i < n; ++i) {
+  select(kMayMerge);
+  for (const std::uint32_t i : m_selected) {
     if (!m_locked[i] && ratio(i) < Real(params.mergeBelow) && transferMass(ctx, i, p.m[i], true))
       ++stats.merges;
   }
@@ -358,10 +450,9 @@ AdaptivityStats Adaptivity::adapt(const AdaptContext& ctx, bool ignoreDelay) {
   // split 1:n, orientations chosen in parallel on the state before any split of this step (one plan a task: a
   // step has a few plans of tens of microseconds each)
   m_plans.clear();
-  for (std::size_t i = 0; i < n; ++i) {
-    if (m_locked[i] || ratio(i) < Real(params.splitAbove))
-      continue;
-    if (!ignoreDelay && p.heavySteps[i] < std::uint32_t(params.splitDelay))
+  select(kMaySplit);
+  for (const std::uint32_t i : m_selected) {
+    if (m_locked[i])
       continue;
     SplitPlan plan;
     plan.parent = i;
@@ -415,12 +506,9 @@ AdaptivityStats Adaptivity::adapt(const AdaptContext& ctx, bool ignoreDelay) {
     }
   }
 
-  // share: a heavy particle gives half its excess to light neighbours, once its mass leaves the band of the
-  // targets' hysteresis (kTargetBand in sim/levels.cpp, 0.3): within it the particle is as close to its
-  // target as the target is to the levels, and sharing would only churn water at rest
-  constexpr double kTargetBand = 0.3;
-  const Real shareAbove = Real(std::max(params.shareAbove, 1.0 + kTargetBand));
-  for (std::size_t i = 0; i < n; ++i) {
+  // share (see above)
+  select(kMayShare);
+  for (const std::uint32_t i : m_selected) {
     if (m_locked[i] || ratio(i) < shareAbove)
       continue;
     if (transferMass(ctx, i, 0.5 * (double(p.m[i]) - double(p.mOpt[i])), false))
@@ -428,11 +516,7 @@ AdaptivityStats Adaptivity::adapt(const AdaptContext& ctx, bool ignoreDelay) {
   }
 
   if (stats.merges + stats.splits > 0) {
-    m_keep.clear();
-    for (std::size_t i = 0; i < p.size(); ++i) {
-      if (i >= n || !m_removed[i])
-        m_keep.push_back(std::uint32_t(i));
-    }
+    parallelSelect(p.size(), 4096, m_keep, [&](std::size_t i) { return i >= n || !m_removed[i]; });
     p.retain(m_keep);
   }
   return stats;
@@ -579,7 +663,8 @@ void Adaptivity::ageSplitChildren(ParticleSet& p, const SimParams& params) {
 std::size_t Adaptivity::memoryBytes() const {
   return m_locked.capacity() + m_removed.capacity() + m_ops.capacity() * sizeof(ParticleOps) +
          m_plans.capacity() * sizeof(SplitPlan) + m_keep.capacity() * sizeof(std::uint32_t) +
-         m_candidates.capacity() * sizeof(m_candidates[0]);
+         m_candidates.capacity() * sizeof(m_candidates[0]) + m_kind.capacity() +
+         m_selected.capacity() * sizeof(std::uint32_t);
 }
 
 }  // namespace fp::sim

@@ -63,6 +63,11 @@ struct AdaptContext {
   std::uint64_t step;                           ///< step index, part of the orientation seed
 };
 
+/// Whether Adaptivity::adapt() leaves out, before its serial merges and shares, the donors whose capacity at
+/// the start of the step is already too small (on by default; the result is the same either way). Tests
+/// switch it off to compare. Returns the setting before.
+bool setAdaptivityPrefilter(bool on);
+
 /// Split, merge, share and support blending, with their scratch arrays.
 class Adaptivity {
  public:
@@ -83,6 +88,8 @@ class Adaptivity {
 
   /// per particle, indexed as the particles were at the start of the last adapt() call: what it did there
   const std::vector<ParticleOps>& lastOperations() const { return m_ops; }
+  /// the merge and share donors the last adapt() left out before its serial passes (setAdaptivityPrefilter)
+  std::size_t lastDonorsLeftOut() const { return m_leftOut; }
 
   /// Temporal blending (docs/method.md, Adaptivity, after Winchenbach et al. 2017): weight beta of the
   /// parent's value in a split child `age` solver steps after the split, 0.5 (1 - age / steps) while
@@ -118,16 +125,25 @@ class Adaptivity {
   /// moves up to `amount` of the donor's mass and momentum to its light neighbours; with `all` the donor is
   /// removed once all its mass is given. True for a completed merge (all) or any share (!all).
   bool transferMass(const AdaptContext& ctx, std::size_t donor, double amount, bool all);
+  /// the donor's capacity in transferMass() before any lock of this step, its negative terms left out: an
+  /// upper bound of its capacity at any later point of the step
+  static double capacityBound(const AdaptContext& ctx, std::size_t donor, bool all);
   void note(std::size_t i, OpKind kind) {
     m_ops[i].kinds = std::uint8_t(m_ops[i].kinds | kind);
     ++m_ops[i].count;
   }
+
+  /// what adapt()'s first pass found a particle may take part in (m_kind bits)
+  enum MayKind : std::uint8_t { kMayMerge = 1, kMaySplit = 2, kMayShare = 4 };
 
   std::vector<std::uint8_t> m_locked;
   std::vector<std::uint8_t> m_removed;
   std::vector<ParticleOps> m_ops;
   std::vector<SplitPlan> m_plans;
   std::vector<std::uint32_t> m_keep;
+  std::vector<std::uint8_t> m_kind;
+  std::vector<std::uint32_t> m_selected;
+  std::size_t m_leftOut = 0;
   std::vector<std::pair<Real, std::uint32_t>> m_candidates;
 };
 

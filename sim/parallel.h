@@ -20,7 +20,9 @@
 #include <tbb/task_group.h>
 
 #include <algorithm>
+#include <cstdint>
 #include <utility>
+#include <vector>
 
 #if defined(__SANITIZE_THREAD__)
 #define FP_TSAN_ANNOTATE 1
@@ -223,6 +225,46 @@ void parallelSort(Iterator first, Iterator last) {
 #else
   tbb::parallel_sort(first, last);
 #endif
+}
+
+/// The indices i in [0, n) with keep(i), ascending, into `out` (its capacity is kept): blocks of `grain`
+/// indices count theirs in parallel, then write them from their offsets, so `keep` is called twice per index
+/// and must be cheap and give the same answer both times. The result does not depend on the thread count;
+/// n <= grain is one serial pass.
+template <class Keep>
+void parallelSelect(std::size_t n, std::size_t grain, std::vector<std::uint32_t>& out, const Keep& keep) {
+  out.clear();
+  grain = std::max<std::size_t>(grain, 1);
+  const std::size_t blocks = (n + grain - 1) / grain;
+  if (blocks <= 1) {
+    for (std::size_t i = 0; i < n; ++i) {
+      if (keep(i))
+        out.push_back(std::uint32_t(i));
+    }
+    return;
+  }
+  using Range = tbb::blocked_range<std::size_t>;
+  std::vector<std::size_t> first(blocks + 1, 0);
+  parallelFor(Range(0, blocks, 1), [&](const Range& r) {
+    for (std::size_t b = r.begin(); b < r.end(); ++b) {
+      std::size_t count = 0;
+      for (std::size_t i = b * grain; i < std::min(n, (b + 1) * grain); ++i)
+        count += keep(i) ? 1 : 0;
+      first[b + 1] = count;
+    }
+  });
+  for (std::size_t b = 0; b < blocks; ++b)
+    first[b + 1] += first[b];
+  out.resize(first[blocks]);
+  parallelFor(Range(0, blocks, 1), [&](const Range& r) {
+    for (std::size_t b = r.begin(); b < r.end(); ++b) {
+      std::size_t k = first[b];
+      for (std::size_t i = b * grain; i < std::min(n, (b + 1) * grain); ++i) {
+        if (keep(i))
+          out[k++] = std::uint32_t(i);
+      }
+    }
+  });
 }
 
 /// tbb::task_group: run() a function on a worker, wait() for every function run so far
