@@ -380,11 +380,12 @@ bool Adaptivity::transferMass(const AdaptContext& ctx, std::size_t donor, double
   return !all && given > 0.0;
 }
 
-AdaptivityStats Adaptivity::adapt(const AdaptContext& ctx, bool ignoreDelay) {
+AdaptivityStats Adaptivity::adapt(const AdaptContext& ctx, bool ignoreDelay, bool compact) {
   ParticleSet& p = ctx.fluid;
   const SimParams& params = ctx.params;
   const std::size_t n = p.size();
   AdaptivityStats stats;
+  m_keep.clear();
   m_locked.resize(n);
   m_removed.resize(n);
   m_ops.resize(n);
@@ -517,7 +518,8 @@ AdaptivityStats Adaptivity::adapt(const AdaptContext& ctx, bool ignoreDelay) {
 
   if (stats.merges + stats.splits > 0) {
     parallelSelect(p.size(), 4096, m_keep, [&](std::size_t i) { return i >= n || !m_removed[i]; });
-    p.retain(m_keep);
+    if (compact)
+      p.retain(m_keep);
   }
   return stats;
 }

@@ -74,7 +74,12 @@ class Adaptivity {
   /// Runs one adaptation step on particles whose optimal mass `mOpt` is set: merges too-light particles,
   /// splits too-heavy ones (after `split_delay` adaptation steps, or at once when `ignoreDelay`), shares mass
   /// from heavy to light ones. A particle takes part in one operation per step. Returns this step's counts.
-  AdaptivityStats adapt(const AdaptContext& ctx, bool ignoreDelay);
+  /// The merged and split particles are removed and the children added at the end; without `compact`, the
+  /// removed ones stay where they were and kept() lists the others for the caller to keep (the simulation
+  /// drops them in the sort its next neighbour search would make anyway).
+  AdaptivityStats adapt(const AdaptContext& ctx, bool ignoreDelay, bool compact = true);
+  /// the particles the last adapt() kept, ascending, children included; empty when it removed none
+  const std::vector<std::uint32_t>& kept() const { return m_keep; }
 
   /// Moves every support radius towards the one of its mass, 4 r (m / m_fine)^(1/3), over
   /// `support_blend_steps` steps, so that densities do not jump after a split or a merge.

@@ -297,15 +297,16 @@ void CellClearance::build(const UniformGrid& grid, const Vec3* x, std::size_t n,
 }
 
 void UniformGrid::sort(const Vec3* x, std::size_t n, std::vector<std::uint32_t>& order,
-                       std::vector<std::uint32_t>& cells) {
+                       std::vector<std::uint32_t>& cells, const std::uint32_t* subset) {
   using Range = tbb::blocked_range<std::size_t>;
   const std::uint32_t nx = std::uint32_t(m_dims.x());
   const std::size_t nRows = std::size_t(m_dims.y()) * std::size_t(m_dims.z());
   m_keys.resize(n);
   parallelFor(Range(0, n, 4096), [&](const Range& r) {
     for (std::size_t i = r.begin(); i < r.end(); ++i) {
-      const Eigen::Vector3i c = cellCoord(x[i]);
-      m_keys[i] = (std::uint64_t(linear(c.x(), c.y(), c.z())) << 32) | std::uint64_t(i);
+      const std::uint32_t point = subset ? subset[i] : std::uint32_t(i);
+      const Eigen::Vector3i c = cellCoord(x[point]);
+      m_keys[i] = (std::uint64_t(linear(c.x(), c.y(), c.z())) << 32) | std::uint64_t(point);
     }
   });
   order.resize(n);
@@ -348,9 +349,14 @@ void UniformGrid::sort(const Vec3* x, std::size_t n, std::vector<std::uint32_t>&
       const std::uint32_t i = m_radix[k];
       order[m_bucket[rowOf(cellOf(i))]++] = i;
     }
-    // the keys in sorted order, which the cell starts below read
+    // the keys in sorted order, which the cell starts below read (`order` held places in the keys so far:
+    // from here the points' indices)
     for (std::size_t k = 0; k < n; ++k)
       m_radix[k] = cellOf(order[k]);
+    if (subset) {
+      for (std::size_t k = 0; k < n; ++k)
+        order[k] = subset[order[k]];
+    }
     for (std::size_t k = 0; k < n; ++k)
       m_keys[k] = (std::uint64_t(m_radix[k]) << 32) | std::uint64_t(order[k]);
   } else {

@@ -56,9 +56,11 @@ class UniformGrid {
 
   /// Sorts x[0..n) by cell (linear index, then original index: stable, hence deterministic), in parallel.
   /// Fills `order` (sorted k <- original order[k]) and `cells`, the cell ranges of the sorted points in the
-  /// compact form CellRanges reads.
+  /// compact form CellRanges reads. With `subset` (n ascending indices), only the points x[subset[k]] are
+  /// sorted and `order` holds their indices: the order that compacting x to the subset and sorting that
+  /// gives.
   void sort(const Vec3* x, std::size_t n, std::vector<std::uint32_t>& order,
-            std::vector<std::uint32_t>& cells);
+            std::vector<std::uint32_t>& cells, const std::uint32_t* subset = nullptr);
   /// the sorted points of cell (cx, cy, cz): [first, second) (tests, diagnostics)
   std::pair<std::uint32_t, std::uint32_t> cellRange(const std::vector<std::uint32_t>& cells, int cx, int cy,
                                                     int cz) const;

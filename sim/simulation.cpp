@@ -475,10 +475,10 @@ void Simulation::computeLevels(bool smooth, LevelSums* sums) {
               });
 }
 
-AdaptivityStats Simulation::adaptResolution(bool ignoreDelay) {
+AdaptivityStats Simulation::adaptResolution(bool ignoreDelay, bool compact) {
   const AdaptContext ctx{m_fluid,  m_fluidNbrs,   m_boundaryNbrs, m_boundary, m_colliders,
                          m_params, m_latticeMass, m_time,         m_stepCount};
-  return m_adaptivity.adapt(ctx, ignoreDelay);
+  return m_adaptivity.adapt(ctx, ignoreDelay, compact);
 }
 
 void Simulation::setColliderPose(std::size_t collider, const Vec3d& position, const Quatd& orientation,
@@ -530,10 +530,17 @@ void Simulation::prepareNeighbors() {
   m_neighborsCurrent = true;
 }
 
-void Simulation::searchFluidNeighbors() {
-  // fluid: counting sort by cell, then physically reorder so neighbours are close in memory
-  m_grid.sort(m_fluid.x.data(), m_fluid.size(), m_order, m_fluidCells);
+void Simulation::sortFluid(const std::vector<std::uint32_t>* subset) {
+  // counting sort by cell, then physically reorder so neighbours are close in memory
+  const std::size_t n = subset ? subset->size() : m_fluid.size();
+  m_grid.sort(m_fluid.x.data(), n, m_order, m_fluidCells, subset ? subset->data() : nullptr);
   m_fluid.permute(m_order);
+}
+
+void Simulation::searchFluidNeighbors() {
+  if (!m_fluidPresorted)
+    sortFluid();
+  m_fluidPresorted = false;
   using Range = tbb::blocked_range<std::size_t>;
   using MinMax = std::pair<Real, Real>;
   const MinMax hRange = parallelReduce(
@@ -828,8 +835,22 @@ void Simulation::step() {
     // this step's split children have blended once more; then new ones may be created (age 0)
     Adaptivity::ageSplitChildren(m_fluid, m_params);
     // the lists of this step's start still index the particles: nothing was reordered since
-    if (adaptNow)
-      st.adaptivity = adaptResolution(false);
+    double presortTime = 0.0;
+    if (adaptNow) {
+      st.adaptivity = adaptResolution(false, false);
+      if (st.adaptivity.splits + st.adaptivity.merges > 0) {
+        // The removed particles are dropped by the sort by cell that the next step's search would make of
+        // the compacted particles: made here on the kept ones, it gives the same order (a stable sort of the
+        // same particles in the same relative order) without a separate pass that moves every field. Nothing
+        // moves the fluid before that search, which then skips its sort; the time counts as the next step's
+        // neighbour search, as prepareNeighbors() does.
+        const auto ts = Clock::now();
+        sortFluid(&m_adaptivity.kept());
+        m_fluidPresorted = true;
+        presortTime = seconds(ts, Clock::now());
+        m_preparedSeconds += presortTime;
+      }
+    }
     if (st.adaptivity.splits + st.adaptivity.merges > 0) {
       // the particles were added and removed: the lists no longer index them (capacity is kept for the next
       // search)
@@ -839,7 +860,7 @@ void Simulation::step() {
       m_boundaryNbrs.indices.clear();
     }
     Adaptivity::blendSupports(m_fluid, m_params, m_latticeMass);
-    st.times.adaptation = seconds(t8, Clock::now()) + blendTime;
+    st.times.adaptation = seconds(t8, Clock::now()) + blendTime - presortTime;
   }
   if (st.heldParticles > 0) {
     // the held particles' lists were emptied: the lists no longer hold all neighbours

@@ -162,7 +162,10 @@ class Simulation {
   /// every particle at the velocity createFluid gave it (`initialById`, NaN for none), after the settling
   /// held them still; see the .cpp for particles created during the settling
   void restoreInitialVelocities(const std::vector<Vec3>& initialById);
-  AdaptivityStats adaptResolution(bool ignoreDelay);
+  AdaptivityStats adaptResolution(bool ignoreDelay, bool compact = true);
+  /// sorts the fluid particles by cell and reorders them so (searchFluidNeighbors); with `subset`, only those
+  /// particles are kept
+  void sortFluid(const std::vector<std::uint32_t>* subset = nullptr);
   void updateColliders();
   void searchNeighbors();
   void searchFluidNeighbors();
@@ -203,6 +206,9 @@ class Simulation {
   // prepareNeighbors(): the lists are those of the current state; the largest support of their search; the
   // wall time of the search, counted in the next step's neighbour time
   bool m_neighborsCurrent = false;
+  // the fluid was sorted by cell at the end of the last step (which dropped the particles its adaptation
+  // removed so) and has not moved since: the next search skips the sort
+  bool m_fluidPresorted = false;
   Real m_searchMaxH = 0;
   double m_preparedSeconds = 0.0;
   NeighborList m_heldNbrs;

@@ -514,6 +514,7 @@ class StateAccess {
     sim.m_last = s.last;
     // Neighbour lists valid for the restored particles, as after a step (readers such as the splash use
     // them). The sort is stable and the positions are those of the last sort, so the order does not change.
+    sim.m_fluidPresorted = false;  // (the grid's cells are those of the particles replaced)
     sim.searchNeighbors();
     sim.m_neighborsCurrent = false;  // the next step searches them again, as after a step
     sim.m_preparedSeconds = 0.0;

@@ -184,6 +184,34 @@ TEST(NeighborSearchTest, CountingSortIsStableAndComplete) {
   }
 }
 
+TEST(NeighborSearchTest, SortingASubsetGivesTheOrderOfSortingTheCompactedPoints) {
+  // The simulation drops the particles an adaptation removed in the sort of the next search
+  // (Simulation::sortFluid): the subset's sort must equal compacting first and sorting that, mapped back to
+  // the original indices, with the same cells; on both sides of the switch to TBB's parallel sort.
+  for (const std::uint32_t n : {2000u, 40000u}) {
+    const Aabb box(Vec3d(0, 0, 0), Vec3d(1, 1, 1));
+    Cloud c = randomCloud(n, 0.1f, 0.0, 1, box);
+    UniformGrid grid;
+    grid.setup(box, 0.1f);
+    std::vector<std::uint32_t> keep;
+    for (std::uint32_t i = 0; i < n; ++i) {
+      if ((i * 2654435761u) % 10 >= 3)  // about 70 %
+        keep.push_back(i);
+    }
+    std::vector<Vec3> compacted;
+    for (std::uint32_t i : keep)
+      compacted.push_back(c.x[i]);
+    std::vector<std::uint32_t> order, cells, subsetOrder, subsetCells;
+    grid.sort(compacted.data(), compacted.size(), order, cells);
+    grid.sort(c.x.data(), keep.size(), subsetOrder, subsetCells, keep.data());
+    ASSERT_EQ(subsetOrder.size(), keep.size());
+    for (std::size_t k = 0; k < keep.size(); ++k) {
+      ASSERT_EQ(subsetOrder[k], keep[order[k]]) << n << " points, place " << k;
+    }
+    EXPECT_EQ(subsetCells, cells) << n << " points";
+  }
+}
+
 TEST(NeighborSearchTest, CompactCellsCostARowNotACellPerEmptyRow) {
   // a grid of 100 x 100 x 100 cells with points in one row: one word per row and the row's starts
   const Aabb box(Vec3d(0, 0, 0), Vec3d(1, 1, 1));
