@@ -281,7 +281,8 @@ TEST(NeighborSearchTest, SymmetricBuildGivesTheSamePairsNoLargerNeighboursFirst)
     const auto last = reordered.indices.begin() + expected.offsets[i + 1];
     std::stable_partition(first, last, [&](std::uint32_t j) { return s.H[j] <= s.H[i]; });
   }
-  std::size_t split = 0;  // lists whose larger neighbours come before smaller indices: the order differs
+  // list entries where the two orders differ (a larger neighbour sorted before a smaller index)
+  std::size_t split = 0;
   for (std::size_t k = 0; k < expected.indices.size(); ++k)
     split += reordered.indices[k] != expected.indices[k];
   EXPECT_GT(split, 1000u) << "the cloud should mix sizes within lists";
