@@ -5,7 +5,7 @@
 ///
 ///   fp_bench [--scene FILE] [--sim-time S] [--threads LIST] [--csv FILE] [--quick] [--set KEY=VALUE]...
 ///   [--speed-log S] [--help]
-///   fp_bench --suite [--sim-time S] [--hand-time S] [--csv FILE]
+///   fp_bench --suite [--sim-time S] [--hand-time S] [--hand-runs N] [--csv FILE]
 ///
 /// --suite measures the rows of issue #12 in one run: the hand tank at r = 5 mm (the desktop's default scene;
 /// fluidplaying, the recorded splash hand, headless, 1 and 2 threads), the coarse hand tank (r = 7.9 mm, the
@@ -26,6 +26,7 @@
 #include <stdexcept>
 #include <string>
 #include <thread>
+#include <tuple>
 #include <vector>
 
 #include "engine/cli.h"
@@ -76,6 +77,7 @@ struct Options {
   std::vector<std::string> sets;  ///< --set KEY=VALUE over the scene's parameters
   bool suite = false;             ///< --suite: the rows of issue #12
   double handTime = 1.0;          ///< --hand-time: simulated seconds of each hand-tank run of the suite
+  int handRuns = 3;               ///< --hand-runs: runs of each hand-tank row, interleaved; the median's kept
   double speedLog = 0;            ///< --speed-log: simulated seconds between speed lines, 0 = none
   bool memory = false;            ///< --memory: bytes per fluid particle by component, the suite's scenes
   bool scaling = false;           ///< --scaling: the default hand tank at each --threads count
@@ -151,6 +153,11 @@ struct CommandLine {
         "simulated seconds of each hand-tank run of --suite, --scaling and --memory (default 1.0; the "
         "recorded "
         "hand lasts 1.25 s)");
+    line.addInteger(
+        "--hand-runs", [this](long long n) { o.handRuns = int(n); }, 1, 100,
+        "runs of each hand-tank row of --suite and --scaling, interleaved (all rows once, then again); a row "
+        "reports its run of median wall time, and the spread of the runs is printed (default 3: the machine "
+        "is shared, and one slow minute moved a single run by 20 %)");
     line.addPositive(
         "--speed-log", [this](double s) { o.speedLog = s; },
         "every S simulated seconds, print the window's step count, smallest step, largest speed (with where "
@@ -568,6 +575,31 @@ struct SuiteRow {
   double wallPerSimSecond() const { return simSeconds > 0 ? wallSeconds / simSeconds : 0.0; }
 };
 
+/// The run of median wall time among runs of one row (a hand tank replays the same steps in every run: only
+/// the times differ), and the spread of their wall times
+struct MedianRow {
+  SuiteRow row;
+  double wallMin = 0;
+  double wallMax = 0;
+  std::size_t runs = 0;
+};
+
+MedianRow medianRun(std::vector<SuiteRow> runs) {
+  std::sort(runs.begin(), runs.end(),
+            [](const SuiteRow& a, const SuiteRow& b) { return a.wallSeconds < b.wallSeconds; });
+  MedianRow m;
+  m.row = runs[(runs.size() - 1) / 2];
+  m.wallMin = runs.front().wallSeconds;
+  m.wallMax = runs.back().wallSeconds;
+  m.runs = runs.size();
+  return m;
+}
+
+/// Each of `rows` (name, scene, threads) run `runs` times, interleaved: every row once, then again; the
+/// median run of each, in the order given
+std::vector<MedianRow> interleavedRuns(const std::vector<std::tuple<std::string, const char*, int>>& rows,
+                                       int runs, double simTime);
+
 fp::sim::PhaseTimes perStepMs(const fp::sim::PhaseTimes& t, std::uint64_t steps) {
   const double k = 1e3 / double(std::max<std::uint64_t>(steps, 1));
   fp::sim::PhaseTimes ms;
@@ -610,6 +642,35 @@ SuiteRow runHandTank(const std::string& name, const char* scene, int threads, do
   r.bytesPerParticle = s.particlesFinal ? double(s.memoryBytes) / double(s.particlesFinal) : 0.0;
   r.msPerStep = perStepMs(s.phases, s.steps);
   return r;
+}
+
+std::vector<MedianRow> interleavedRuns(const std::vector<std::tuple<std::string, const char*, int>>& rows,
+                                       int runs, double simTime) {
+  std::vector<std::vector<SuiteRow>> all(rows.size());
+  for (int k = 0; k < runs; ++k) {
+    for (std::size_t r = 0; r < rows.size(); ++r) {
+      const auto& [name, scene, threads] = rows[r];
+      all[r].push_back(runHandTank(name, scene, threads, simTime));
+    }
+  }
+  std::vector<MedianRow> out;
+  for (std::vector<SuiteRow>& r : all)
+    out.push_back(medianRun(std::move(r)));
+  return out;
+}
+
+/// one line per median row: its wall time and the spread of its runs
+void printSpread(std::ostream& out, const std::vector<MedianRow>& rows) {
+  out << "hand-tank rows: the run of median wall time of " << (rows.empty() ? 0 : rows.front().runs)
+      << " interleaved runs each\n";
+  for (const MedianRow& m : rows) {
+    char text[200];
+    std::snprintf(text, sizeof(text),
+                  "  %-18s %2d thread(s): wall %.3f s (runs %.3f - %.3f s, spread %.1f %%)\n",
+                  m.row.name.c_str(), m.row.threads, m.row.wallSeconds, m.wallMin, m.wallMax,
+                  m.row.wallSeconds > 0 ? 100.0 * (m.wallMax - m.wallMin) / m.row.wallSeconds : 0.0);
+    out << text;
+  }
 }
 
 const std::vector<std::pair<const char*, std::function<std::string(const SuiteRow&)>>>& suiteColumns() {
@@ -893,27 +954,38 @@ int main(int argc, char** argv) {
   }
   if (options.scaling) {
     std::vector<SuiteRow> rows;
+    std::vector<MedianRow> medians;
     if (const int code = runGuarded([&] {
           std::cout << "fp_bench --scaling: the default hand tank by thread count\nmachine: "
                     << machineDescription() << "\n";
+          std::vector<std::tuple<std::string, const char*, int>> which;
           for (int threads : options.threads)
-            rows.push_back(runHandTank("hand_tank_r5mm", kHandScene, threads, options.handTime));
+            which.emplace_back("hand_tank_r5mm", kHandScene, threads);
+          medians = interleavedRuns(which, options.handRuns, options.handTime);
+          for (const MedianRow& m : medians)
+            rows.push_back(m.row);
         });
         code != kExitOk)
       return code;
     std::cout << "\n";
     printScaling(std::cout, rows);
+    std::cout << "\n";
+    printSpread(std::cout, medians);
     return writeSuiteCsvFile(options.csvPath, rows);
   }
   if (options.suite) {
     const double damTime = options.simTime.value_or(kDefaultSimTime);
     std::vector<SuiteRow> rows;
+    std::vector<MedianRow> medians;
     if (const int code = runGuarded([&] {
           std::cout << "fp_bench --suite: issue #12's rows in one run\nmachine: " << machineDescription()
                     << "\n";
-          rows.push_back(runHandTank("hand_tank_r5mm", kHandScene, 2, options.handTime));
-          rows.push_back(runHandTank("hand_tank_r5mm", kHandScene, 1, options.handTime));
-          rows.push_back(runHandTank("hand_tank_coarse", kCoarseHandScene, 2, options.handTime));
+          medians = interleavedRuns({{"hand_tank_r5mm", kHandScene, 2},
+                                     {"hand_tank_r5mm", kHandScene, 1},
+                                     {"hand_tank_coarse", kCoarseHandScene, 2}},
+                                    options.handRuns, options.handTime);
+          for (const MedianRow& m : medians)
+            rows.push_back(m.row);
           const Row dam = runOnce(kDefaultScene, damTime, kRefThreads, {});
           SuiteRow r;
           r.name = "dam_break_hires";
@@ -931,6 +1003,8 @@ int main(int argc, char** argv) {
       return code;
     std::cout << "\n";
     printSuite(std::cout, rows, damTime);
+    std::cout << "\n";
+    printSpread(std::cout, medians);
     return writeSuiteCsvFile(options.csvPath, rows);
   }
   const std::string scenePath = options.scene.value_or(options.quick ? kQuickScene : kDefaultScene);
