@@ -265,11 +265,11 @@ Real receiverBelow(const SimParams& params, bool all) {
 /// Whether fluid particle j may receive from `donor` (locks aside): light enough, and within their pair
 /// support; then `distance` and `room`, j's term of the donor's capacity.
 inline bool receiverRoom(const ParticleSet& p, std::size_t donor, std::uint32_t j, Real below, double rate,
-                         Real& distance, double& room) {
+                         Real& distance, double& room, Real reach = Real(1)) {
   if (p.m[j] >= below * p.mOpt[j])
     return false;
   distance = (p.x[j] - p.x[donor]).norm();
-  if (distance >= pairSupport(p.H[j], p.H[donor]))
+  if (distance >= reach * pairSupport(p.H[j], p.H[donor]))
     return false;
   room = std::min(double(p.mOpt[j]) - double(p.m[j]), rate * double(p.m[j]));
   return true;
@@ -292,11 +292,14 @@ double Adaptivity::capacityBound(const AdaptContext& ctx, std::size_t donor, boo
   const ParticleSet& p = ctx.fluid;
   const double rate = receiverRate(ctx.params);
   const Real below = receiverBelow(ctx.params, all);
+  // (receivers up to a hair beyond the pair support count too: a build that fuses the distance's
+  // multiply-adds differently here than in transferMass() must not leave out a receiver that one counts)
+  constexpr Real kReach = Real(1) + Real(1e-5);
   double bound = 0.0;
   for (std::uint32_t k = ctx.fluidNbrs.offsets[donor]; k < ctx.fluidNbrs.offsets[donor + 1]; ++k) {
     Real distance;
     double room;
-    if (receiverRoom(p, donor, ctx.fluidNbrs.indices[k], below, rate, distance, room))
+    if (receiverRoom(p, donor, ctx.fluidNbrs.indices[k], below, rate, distance, room, kReach))
       bound += std::max(0.0, room);
   }
   return bound;

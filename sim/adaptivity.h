@@ -130,8 +130,8 @@ class Adaptivity {
   /// moves up to `amount` of the donor's mass and momentum to its light neighbours; with `all` the donor is
   /// removed once all its mass is given. True for a completed merge (all) or any share (!all).
   bool transferMass(const AdaptContext& ctx, std::size_t donor, double amount, bool all);
-  /// the donor's capacity in transferMass() before any lock of this step, its negative terms left out: an
-  /// upper bound of its capacity at any later point of the step
+  /// the donor's capacity in transferMass() before any lock of this step, its negative terms left out (and
+  /// receivers a hair beyond reach counted): an upper bound of its capacity at any later point of the step
   static double capacityBound(const AdaptContext& ctx, std::size_t donor, bool all);
   void note(std::size_t i, OpKind kind) {
     m_ops[i].kinds = std::uint8_t(m_ops[i].kinds | kind);

@@ -3,6 +3,7 @@
 #include <tbb/blocked_range.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <sstream>
@@ -251,6 +252,7 @@ void Simulation::relax(int steps) {
   m_boundaryImpulse.setZero();
   m_last = StepStats{};
   m_run = RunStats{};
+  m_preparedSeconds = 0.0;  // (the settling's last sort is not the first step's)
 }
 
 void Simulation::restoreInitialVelocities(const std::vector<Vec3>& initialById) {
@@ -475,6 +477,17 @@ void Simulation::computeLevels(bool smooth, LevelSums* sums) {
               });
 }
 
+namespace {
+std::atomic<bool>& presortSetting() {
+  static std::atomic<bool> on(true);
+  return on;
+}
+}  // namespace
+
+bool setPresortAfterAdaptation(bool on) {
+  return presortSetting().exchange(on);
+}
+
 AdaptivityStats Simulation::adaptResolution(bool ignoreDelay, bool compact) {
   const AdaptContext ctx{m_fluid,  m_fluidNbrs,   m_boundaryNbrs, m_boundary, m_colliders,
                          m_params, m_latticeMass, m_time,         m_stepCount};
@@ -538,7 +551,8 @@ void Simulation::sortFluid(const std::vector<std::uint32_t>* subset) {
 }
 
 void Simulation::searchFluidNeighbors() {
-  if (!m_fluidPresorted)
+  // (the cells' header holds the count of points sorted: a guard against particles added since)
+  if (!m_fluidPresorted || m_fluidCells.empty() || m_fluidCells[0] != m_fluid.size())
     sortFluid();
   m_fluidPresorted = false;
   using Range = tbb::blocked_range<std::size_t>;
@@ -837,8 +851,9 @@ void Simulation::step() {
     // the lists of this step's start still index the particles: nothing was reordered since
     double presortTime = 0.0;
     if (adaptNow) {
-      st.adaptivity = adaptResolution(false, false);
-      if (st.adaptivity.splits + st.adaptivity.merges > 0) {
+      const bool presort = presortSetting().load();
+      st.adaptivity = adaptResolution(false, !presort);
+      if (presort && st.adaptivity.splits + st.adaptivity.merges > 0) {
         // The removed particles are dropped by the sort by cell that the next step's search would make of
         // the compacted particles: made here on the kept ones, it gives the same order (a stable sort of the
         // same particles in the same relative order) without a separate pass that moves every field. Nothing

@@ -70,6 +70,11 @@ struct RunStats {
 };
 
 /// A running simulation.
+/// Whether a step that split or merged drops the removed particles in the sort by cell of the next search,
+/// made at the step's end (on by default), or compacts them in a pass of its own first; the results are the
+/// same either way. Tests switch it off to compare. Returns the setting before.
+bool setPresortAfterAdaptation(bool on);
+
 class Simulation {
  public:
   /// builds particles and colliders from a scene; throws InputError for an invalid scene
