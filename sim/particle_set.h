@@ -14,6 +14,8 @@ namespace fp::sim {
 enum ParticleFlag : std::uint32_t {
   kFlagSurface = 1u << 0,  ///< on the free surface (adaptivity)
   kFlagSplit = 1u << 1,    ///< created by a split (renderer highlight)
+  /// the support is its mass's own (Adaptivity::blendSupports): whatever changes the mass clears it
+  kFlagSupportSettled = 1u << 2,
 };
 
 /// ParticleSet::parentId of a particle that blends from no parent.

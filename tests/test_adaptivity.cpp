@@ -5,6 +5,7 @@
 
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -365,6 +366,76 @@ TEST(AdaptivityTest, ChildrenNeverLandInAWallSmall) {
     EXPECT_EQ(nb.p.splitTime[i], Real(1.0));
   }
   EXPECT_EQ(children, st.children);
+}
+
+TEST(AdaptivityTest, ABlockedSplitIsPlannedAgainOnlyAfterFourStepsSmall) {
+  // Every particle far too heavy: the ones next to the walls whose every orientation puts a child in a wall
+  // are blocked. The same neighbourhood again with only those heavy (nothing else to do, so the lists stay
+  // valid from step to step): they are planned in the first step, left alone for three, planned again in the
+  // fifth (before, a blocked split was planned in every step).
+  std::vector<std::uint32_t> blockedIds;
+  {
+    Neighbourhood nb(11);
+    for (std::size_t i = 0; i < nb.p.size(); ++i)
+      nb.p.mOpt[i] = nb.p.m[i] / Real(5);
+    Adaptivity adaptivity;
+    const AdaptivityStats st = adaptivity.adapt(nb.context(1.0), true);
+    ASSERT_GT(st.splitsBlocked, 0u);
+    for (std::size_t i = 0; i < nb.p.size(); ++i) {
+      if (!(nb.p.flags[i] & kFlagSplit) && nb.p.m[i] >= Real(nb.params.splitAbove) * nb.p.mOpt[i]) {
+        blockedIds.push_back(nb.p.id[i]);
+        // the split delay restarts four steps short of its end
+        EXPECT_EQ(nb.p.heavySteps[i], std::uint32_t(nb.params.splitDelay - 4));
+      }
+    }
+    EXPECT_EQ(blockedIds.size(), st.splitsBlocked);
+  }
+  Neighbourhood nb(11);
+  for (std::size_t i = 0; i < nb.p.size(); ++i) {
+    const bool blocked = std::find(blockedIds.begin(), blockedIds.end(), nb.p.id[i]) != blockedIds.end();
+    nb.p.mOpt[i] = blocked ? nb.p.m[i] / Real(5) : nb.p.m[i];
+  }
+  Adaptivity adaptivity;
+  std::vector<std::uint64_t> blockedPerStep;
+  for (int step = 0; step < 9; ++step) {
+    const AdaptivityStats st = adaptivity.adapt(nb.context(1.0), step == 0);
+    EXPECT_EQ(st.splits + st.merges + st.redistributions, 0u) << "step " << step;
+    blockedPerStep.push_back(st.splitsBlocked);
+  }
+  const std::uint64_t k = blockedIds.size();
+  EXPECT_EQ(blockedPerStep, (std::vector<std::uint64_t>{k, 0, 0, 0, k, 0, 0, 0, k}));
+}
+
+TEST(AdaptivityTest, SettledSupportsFollowEveryMassChangeSmall) {
+  // blendSupports skips the particles whose support is already their mass's own (kFlagSupportSettled); every
+  // mass change must clear the flag. After merges, splits and shares, the supports blended with the skip
+  // equal, bit for bit, those blended with every flag cleared, and end at their masses' own supports.
+  for (unsigned seed = 1; seed <= 3; ++seed) {
+    Neighbourhood nb(seed);
+    nb.params.supportBlendSteps = 10;
+    for (int k = 0; k < 3; ++k)
+      Adaptivity::blendSupports(nb.p, nb.params, nb.mFine);
+    for (std::size_t i = 0; i < nb.p.size(); ++i)
+      ASSERT_TRUE(nb.p.flags[i] & kFlagSupportSettled) << "particle " << i << " not settled at the start";
+    Adaptivity adaptivity;
+    const AdaptivityStats st = adaptivity.adapt(nb.context(0.5), true);
+    ASSERT_GT(st.merges + st.redistributions, 10u);
+    ParticleSet all = nb.p;
+    std::size_t differed = 0;
+    for (int k = 0; k < 60; ++k) {
+      for (std::uint32_t& f : all.flags)
+        f &= ~std::uint32_t(kFlagSupportSettled);
+      Adaptivity::blendSupports(all, nb.params, nb.mFine);
+      Adaptivity::blendSupports(nb.p, nb.params, nb.mFine);
+      ASSERT_EQ(std::memcmp(all.H.data(), nb.p.H.data(), all.H.size() * sizeof(Real)), 0) << "call " << k;
+    }
+    for (std::size_t i = 0; i < nb.p.size(); ++i) {
+      const Real target = supportForMass(nb.p.m[i], nb.mFine, Real(nb.params.particleRadius));
+      EXPECT_EQ(nb.p.H[i], target) << "particle " << i;
+      differed += nb.p.flags[i] & kFlagSupportSettled ? 0 : 1;
+    }
+    EXPECT_EQ(differed, 0u);
+  }
 }
 
 TEST(AdaptivityTest, OrientationChoiceLowersTheSplitDensityErrorSmall) {
