@@ -6,6 +6,7 @@
 /// a few steps. Every operation conserves total mass and linear momentum to round-off.
 
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "sim/boundary_set.h"
@@ -88,8 +89,11 @@ class Adaptivity {
   /// Split error E (docs/method.md, Adaptivity) of placing the children of `o` at `children` (each of
   /// mass m_o / n and, as the split creates them, the parent's support), with the neighbourhood of the
   /// context, of the densities the solver then sees: with temporal blending on (`split_blend_steps` > 0) a
-  /// child's density error enters at (1 - splitBlendWeight(0)) of its own [-]
-  static double splitError(const AdaptContext& ctx, std::size_t o, const std::vector<Vec3>& children);
+  /// child's density error enters at (1 - splitBlendWeight(0)) of its own [-]. E is a sum of squares: once
+  /// its partial sum reaches `bound` the rest is not evaluated and that partial sum (>= bound) is returned,
+  /// so a candidate that cannot beat the best so far costs less and is rejected all the same.
+  static double splitError(const AdaptContext& ctx, std::size_t o, const std::vector<Vec3>& children,
+                           double bound = std::numeric_limits<double>::infinity());
 
   /// per particle, indexed as the particles were at the start of the last adapt() call: what it did there
   const std::vector<ParticleOps>& lastOperations() const { return m_ops; }

@@ -438,6 +438,40 @@ TEST(AdaptivityTest, SettledSupportsFollowEveryMassChangeSmall) {
   }
 }
 
+TEST(AdaptivityTest, ABoundedSplitErrorStopsAtItsBoundAndIsExactBelowItSmall) {
+  // planSplit passes the best error so far as a bound: a candidate whose partial sum reaches it is rejected
+  // unfinished. Below the bound the error must be the whole one, bit for bit; at or above it, a partial sum
+  // between the bound and the whole error (so `e < best` decides as the whole error would).
+  Neighbourhood nb(5);
+  const AdaptContext ctx = nb.context(0.0);
+  const double r = nb.params.particleRadius;
+  std::size_t stopped = 0;
+  for (std::size_t o = 0; o < nb.p.size(); o += 7) {
+    for (int n = 2; n <= 4; ++n) {
+      const double radius = r * std::cbrt(double(nb.p.m[o]) / double(nb.mFine));
+      for (int k = 0; k < 3; ++k) {
+        const Quatd rot(Eigen::AngleAxisd(0.7 * k + 0.1 * n, Vec3d(1, 2, 3).normalized()));
+        std::vector<Vec3> children;
+        for (const Vec3d& offset : SplitTemplates::get().offsets(n))
+          children.push_back((nb.p.x[o].cast<double>() + radius * (rot * offset)).cast<Real>());
+        const double whole = Adaptivity::splitError(ctx, o, children);
+        ASSERT_GT(whole, 0.0);
+        EXPECT_EQ(Adaptivity::splitError(ctx, o, children, whole * 1.5), whole);
+        EXPECT_EQ(Adaptivity::splitError(ctx, o, children, std::nextafter(whole, 2 * whole)), whole);
+        for (double f : {0.01, 0.3, 0.9, 1.0}) {
+          const double bound = whole * f;
+          const double e = Adaptivity::splitError(ctx, o, children, bound);
+          EXPECT_GE(e, bound);
+          EXPECT_LE(e, whole);
+          stopped += e < whole;
+        }
+      }
+    }
+  }
+  // the bound does stop evaluations early
+  EXPECT_GT(stopped, 100u);
+}
+
 TEST(AdaptivityTest, OrientationChoiceLowersTheSplitDensityErrorSmall) {
   // The reported errors (the plans') and the children really placed: each split's children, at the tail of
   // the set in plan order, are scored again with the public split error on an untouched copy of the
