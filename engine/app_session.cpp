@@ -227,6 +227,19 @@ void AppSession::takeSnapshot() {
   }
 }
 
+bool AppSession::keepNonLive(sim::SimParams& next) const {
+  bool pending = false;
+  for (const sim::ParamInfo& info : sim::ParamTable::sim().entries()) {
+    if (info.live)
+      continue;
+    if (!sim::ParamTable::equal(info, next, m_sim->params())) {
+      pending = true;
+      sim::ParamTable::copy(info, m_sim->params(), next);
+    }
+  }
+  return pending;
+}
+
 void AppSession::rollBack(const std::string& why) {
   RecoveryReport& r = m_recovery;
   const double failedAt = m_sim->time();
@@ -257,7 +270,11 @@ void AppSession::rollBack(const std::string& why) {
   ++r.rollbacks;
   r.failedAt = failedAt;
   r.restoredTo = time;
-  m_sim->params() = m_params;
+  // the snapshot's edits: the live ones now, the others (a particle radius changed in the panel before the
+  // snapshot) still wait for a reset, as they did (they were applied here until session 20)
+  sim::SimParams next = m_params;
+  m_restartPending = keepNonLive(next);
+  m_sim->params() = next;
   m_sim->params().dtMax = r.dtCap;
   s << "rolled back to t = " << time << " s, time step cap " << std::setprecision(3) << 1e3 * r.dtCap
     << " ms for 1 s (rollback " << r.rollbacks << ")";
@@ -473,15 +490,7 @@ void AppSession::applyRequests() {
   }
   // live parameters now; the others wait for a reset
   sim::SimParams next = m_params;
-  bool pending = false;
-  for (const sim::ParamInfo& info : sim::ParamTable::sim().entries()) {
-    if (info.live)
-      continue;
-    if (!sim::ParamTable::equal(info, next, m_sim->params())) {
-      pending = true;
-      sim::ParamTable::copy(info, m_sim->params(), next);
-    }
-  }
+  const bool pending = keepNonLive(next);
   // the recovery's time-step cap for its second, then the edited step again
   if (m_recovery.dtCap > 0.0 && m_sim->time() >= m_recovery.capUntil)
     m_recovery.dtCap = 0.0;

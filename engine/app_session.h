@@ -241,6 +241,9 @@ class AppSession {
   void runSteps(double target, double budget, bool oneStep);
   void restoreAppState(const std::vector<double>& extra);
   void rollBack(const std::string& why);
+  /// `next` with the running simulation's values of every parameter that is not live (they wait for a
+  /// reset); true when one of them differed (a reset is pending)
+  bool keepNonLive(sim::SimParams& next) const;
   void takeSnapshot();
 
   SessionConfig m_config;

@@ -108,7 +108,7 @@ double Adaptivity::splitError(const AdaptContext& ctx, std::size_t o, const std:
     for (const Vec3& xs : children)
       tau += double(Vs) * CubicSpline::w((p.x[j] - xs).norm(), Hjs);
     e += tau * tau;
-    if (e >= bound)
+    if (e > bound)
       return e;
   }
   // tau_s: the children's density error against the parent's density
@@ -132,7 +132,7 @@ double Adaptivity::splitError(const AdaptContext& ctx, std::size_t o, const std:
     // at the split is the target: its error enters at (1 - beta)
     const double tau = (1.0 - double(blend)) * (rho - target);
     e += tau * tau;
-    if (e >= bound)
+    if (e > bound)
       return e;
   }
   return e;
@@ -180,8 +180,8 @@ void Adaptivity::planSplit(const AdaptContext& ctx, SplitPlan& plan) const {
   // (a child that near the surface point closest to the parent is too near), and at least the parent's less
   // the child's offset (1-Lipschitz: a child that near the parent keeps the clearance). Margins leave the
   // cases within round-off of a bound to the query. All children are first checked against the bounds, so a
-  // candidate with a child in the wall is mostly rejected before any query (blocked splits are planned again
-  // every step).
+  // candidate with a child in the wall is mostly rejected before any query (a blocked split is planned again
+  // kBlockedSplitRetry steps later).
   const double clearance = 2.0 * childRadius;
   thread_local std::vector<Vec3d> undecided;
   auto valid = [&](const std::vector<Vec3>& children) {
@@ -204,7 +204,7 @@ void Adaptivity::planSplit(const AdaptContext& ctx, SplitPlan& plan) const {
     }
     return true;
   };
-  // A candidate whose error reaches the best so far is rejected whatever the rest of its sum (splitError's
+  // A candidate whose error exceeds the best so far is rejected whatever the rest of its sum (splitError's
   // bound): the same choice, bit for bit, at less cost.
   constexpr double kNoBound = std::numeric_limits<double>::infinity();
   const int candidates = std::clamp(ctx.params.orientationCandidates, 1, kMaxCandidates);
@@ -488,7 +488,9 @@ AdaptivityStats Adaptivity::adapt(const AdaptContext& ctx, bool ignoreDelay, boo
   for (const SplitPlan& plan : m_plans) {
     if (plan.chosen < 0) {
       // every orientation put a child in a wall: planned again kBlockedSplitRetry solver steps later (or
-      // after the split delay, when that is shorter), not in every step while the wall is still there
+      // after the split delay, when that is shorter), not in every step while the wall is still there. (The
+      // delay counts in steps of the adaptation period: with a period above 1 the retry is rounded up to a
+      // whole number of adaptations.)
       ++stats.splitsBlocked;
       const std::uint32_t delay = std::uint32_t(std::max(0, params.splitDelay));
       p.heavySteps[plan.parent] = delay > kBlockedSplitRetry ? delay - kBlockedSplitRetry : 0u;

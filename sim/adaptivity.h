@@ -83,15 +83,18 @@ class Adaptivity {
   const std::vector<std::uint32_t>& kept() const { return m_keep; }
 
   /// Moves every support radius towards the one of its mass, 4 r (m / m_fine)^(1/3), over
-  /// `support_blend_steps` steps, so that densities do not jump after a split or a merge.
+  /// `support_blend_steps` steps, so that densities do not jump after a split or a merge. Skips particles
+  /// flagged kFlagSupportSettled: every call on a particle set must use the same particle radius and mFine,
+  /// and whatever changes a mass must clear the flag.
   static void blendSupports(ParticleSet& p, const SimParams& params, Real mFine);
 
   /// Split error E (docs/method.md, Adaptivity) of placing the children of `o` at `children` (each of
   /// mass m_o / n and, as the split creates them, the parent's support), with the neighbourhood of the
   /// context, of the densities the solver then sees: with temporal blending on (`split_blend_steps` > 0) a
   /// child's density error enters at (1 - splitBlendWeight(0)) of its own [-]. E is a sum of squares: once
-  /// its partial sum reaches `bound` the rest is not evaluated and that partial sum (>= bound) is returned,
-  /// so a candidate that cannot beat the best so far costs less and is rejected all the same.
+  /// its partial sum exceeds `bound` the rest is not evaluated and that partial sum (> bound) is returned,
+  /// so a candidate that cannot beat the best so far costs less and is rejected all the same. (An infinite
+  /// bound never stops it, whatever the terms.)
   static double splitError(const AdaptContext& ctx, std::size_t o, const std::vector<Vec3>& children,
                            double bound = std::numeric_limits<double>::infinity());
 

@@ -508,6 +508,10 @@ class StateAccess {
     }
     sim.m_fluid = std::move(s.fluid);
     sim.m_fluid.m_nextId = s.nextId;
+    // a loaded support is not trusted to be its mass's own: the next blend checks every particle again (and,
+    // where it is, gives the same support, so a restored run stays bit-identical)
+    for (std::uint32_t& f : sim.m_fluid.flags)
+      f &= ~std::uint32_t(kFlagSupportSettled);
     boundaryArrays(
         [&](auto member, const char*, bool) { sim.m_boundary.*member = std::move(s.boundary.*member); });
     sim.m_run = s.run;

@@ -439,7 +439,7 @@ TEST(AdaptivityTest, SettledSupportsFollowEveryMassChangeSmall) {
 }
 
 TEST(AdaptivityTest, ABoundedSplitErrorStopsAtItsBoundAndIsExactBelowItSmall) {
-  // planSplit passes the best error so far as a bound: a candidate whose partial sum reaches it is rejected
+  // planSplit passes the best error so far as a bound: a candidate whose partial sum exceeds it is rejected
   // unfinished. Below the bound the error must be the whole one, bit for bit; at or above it, a partial sum
   // between the bound and the whole error (so `e < best` decides as the whole error would).
   Neighbourhood nb(5);

@@ -297,6 +297,43 @@ TEST(StateCliTest, BadStateFilesAreNamedInOneLineWithExitThree) {
   EXPECT_EQ(runExe(tiny + " --save-state-every 3", err), engine::kExitUsage) << err;
 }
 
+TEST(RecoveryTest, ARollbackKeepsAPendingParameterPendingSmall) {
+  // a particle radius edited in the panel waits for a reset (not live); snapshots taken after the edit keep
+  // it as an edit. A rollback to one of them must leave it pending, not hand it to the running simulation
+  // (its particles were built for the old radius, and their supports follow from it)
+  engine::SessionConfig config;
+  config.scenePath = engine::assetPath("assets/scenes/tiny_dam_break.json");
+  config.mode = "fluidplaying";
+  config.fixedStep = true;
+  config.recover = true;
+  config.hand = false;
+  engine::AppSession session(config);
+  auto frame = [&session] {
+    session.applyRequests();
+    session.startSteps(1.0 / 60.0, 1e9);
+    session.finishSteps();
+  };
+  const double radius = session.simulation().params().particleRadius;
+  session.editParams().particleRadius = 1.25 * radius;
+  for (int k = 0; k < 40; ++k)
+    frame();
+  ASSERT_EQ(session.error(), "");
+  ASSERT_TRUE(session.restartPending());
+  ASSERT_EQ(session.simulation().params().particleRadius, radius);
+  ASSERT_GE(session.snapshots().size(), 1u);
+  session.editParams().maxSpeed = sim::ParamTable::sim().at("max_speed").min;
+  frame();
+  ASSERT_EQ(session.recovery().rollbacks, 1) << session.recovery().message;
+  EXPECT_EQ(session.simulation().params().particleRadius, radius)
+      << "a pending edit was applied by the rollback";
+  EXPECT_EQ(session.editParams().particleRadius, 1.25 * radius) << "the edit is still the panel's";
+  EXPECT_TRUE(session.restartPending());
+  for (int k = 0; k < 10; ++k)
+    frame();
+  EXPECT_EQ(session.error(), "");
+  EXPECT_EQ(session.simulation().params().particleRadius, radius);
+}
+
 TEST(RecoveryTest, AnAbsurdLiveParameterRollsBackToTheLastSnapshotAndRunsOn) {
   // the window's session (recover on): an instability restores the newest in-memory snapshot and halves the
   // time-step cap for a second, instead of pausing with an error; max_speed at its minimum is the absurd
