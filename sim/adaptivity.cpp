@@ -263,6 +263,13 @@ double receiverRate(const SimParams& params) {
                   std::max(params.transferRate, kMaxTransferPerAdaptation));
 }
 
+/// Every change of a particle's mass goes through here: its support is no longer its mass's own
+/// (kFlagSupportSettled, Adaptivity::blendSupports).
+inline void setMass(ParticleSet& p, std::size_t i, Real m) {
+  p.m[i] = m;
+  p.flags[i] &= ~std::uint32_t(kFlagSupportSettled);
+}
+
 /// Solver steps before a split that every orientation blocked is planned again. On the propeller at
 /// r = 0.0088 m a blocked split was planned in every step: 964 of 1,816 plans in 2 s, a third of the plans'
 /// time, for parents the blades pass within a few steps anyway.
@@ -370,8 +377,7 @@ bool Adaptivity::transferMass(const AdaptContext& ctx, std::size_t donor, double
     if (all)
       p.x[j] = ((mj * p.x[j].cast<double>() + give * xDonor) / total).cast<Real>();
     p.v[j] = ((mj * p.v[j].cast<double>() + give * vDonor) / total).cast<Real>();
-    p.m[j] = Real(total);
-    p.flags[j] &= ~std::uint32_t(kFlagSupportSettled);
+    setMass(p, j, Real(total));
     m_locked[j] = 1;
     note(j, kOpReceived);
   }
@@ -382,8 +388,7 @@ bool Adaptivity::transferMass(const AdaptContext& ctx, std::size_t donor, double
     const double total = mj + left;
     p.x[last] = ((mj * p.x[last].cast<double>() + left * xDonor) / total).cast<Real>();
     p.v[last] = ((mj * p.v[last].cast<double>() + left * vDonor) / total).cast<Real>();
-    p.m[last] = Real(total);
-    p.flags[last] &= ~std::uint32_t(kFlagSupportSettled);
+    setMass(p, last, Real(total));
     left = 0.0;
   }
   const double given = amount - std::max(0.0, left);
@@ -395,8 +400,7 @@ bool Adaptivity::transferMass(const AdaptContext& ctx, std::size_t donor, double
   }
   if (given > 0.0)
     note(donor, kOpShared);
-  p.m[donor] = Real(mDonor - given);
-  p.flags[donor] &= ~std::uint32_t(kFlagSupportSettled);
+  setMass(p, donor, Real(mDonor - given));
   return !all && given > 0.0;
 }
 
@@ -555,8 +559,8 @@ void Adaptivity::blendSupports(ParticleSet& p, const SimParams& params, Real mFi
   const Real keep = params.supportBlendSteps > 0 ? Real(std::exp(-3.0 / params.supportBlendSteps)) : Real(0);
   // (a cube root a particle: worth two threads from about 1,000 particles; the grain does not change results)
   // A particle whose support was its mass's own at the last call and whose mass has not changed since
-  // (kFlagSupportSettled, which every mass change clears) would get the same support again: the cube root
-  // is skipped: seven in ten particles a step on the propeller at r = 0.0088 m and in the hand tank.
+  // (kFlagSupportSettled, cleared by setMass) would get the same support again, so its cube root is skipped
+  // (seven in ten particles a step on the propeller at r = 0.0088 m and in the hand tank).
   parallelFor(tbb::blocked_range<std::size_t>(0, p.size(), 512),
               [&](const tbb::blocked_range<std::size_t>& rg) {
                 for (std::size_t i = rg.begin(); i < rg.end(); ++i) {

@@ -150,6 +150,12 @@ struct Neighbourhood {
   AdaptContext context(double time) {
     return AdaptContext{p, fluidNbrs, boundaryNbrs, boundary, colliders, params, mFine, time, 7};
   }
+
+  /// every particle five times its optimal mass: all split, many of them next to the container's walls
+  void makeAllTooHeavy() {
+    for (std::size_t i = 0; i < p.size(); ++i)
+      p.mOpt[i] = p.m[i] / Real(5);
+  }
 };
 
 }  // namespace
@@ -350,9 +356,7 @@ TEST(AdaptivityTest, EachParticleTakesPartInOneOperationPerStepSmall) {
 
 TEST(AdaptivityTest, ChildrenNeverLandInAWallSmall) {
   Neighbourhood nb(11);
-  // every particle far too heavy: all split, many of them next to the container's walls
-  for (std::size_t i = 0; i < nb.p.size(); ++i)
-    nb.p.mOpt[i] = nb.p.m[i] / Real(5);
+  nb.makeAllTooHeavy();
   Adaptivity adaptivity;
   const AdaptivityStats st = adaptivity.adapt(nb.context(1.0), true);
   EXPECT_GT(st.splits, 200u);
@@ -376,8 +380,7 @@ TEST(AdaptivityTest, ABlockedSplitIsPlannedAgainOnlyAfterFourStepsSmall) {
   std::vector<std::uint32_t> blockedIds;
   {
     Neighbourhood nb(11);
-    for (std::size_t i = 0; i < nb.p.size(); ++i)
-      nb.p.mOpt[i] = nb.p.m[i] / Real(5);
+    nb.makeAllTooHeavy();
     Adaptivity adaptivity;
     const AdaptivityStats st = adaptivity.adapt(nb.context(1.0), true);
     ASSERT_GT(st.splitsBlocked, 0u);

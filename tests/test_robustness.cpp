@@ -297,22 +297,35 @@ TEST(StateCliTest, BadStateFilesAreNamedInOneLineWithExitThree) {
   EXPECT_EQ(runExe(tiny + " --save-state-every 3", err), engine::kExitUsage) << err;
 }
 
-TEST(RecoveryTest, ARollbackKeepsAPendingParameterPendingSmall) {
-  // a particle radius edited in the panel waits for a reset (not live); snapshots taken after the edit keep
-  // it as an edit. A rollback to one of them must leave it pending, not hand it to the running simulation
-  // (its particles were built for the old radius, and their supports follow from it)
+namespace {
+
+/// the window's session on the tiny dam break: fixed steps, recovery on, no hand
+engine::SessionConfig recoveringConfig() {
   engine::SessionConfig config;
   config.scenePath = engine::assetPath("assets/scenes/tiny_dam_break.json");
   config.mode = "fluidplaying";
   config.fixedStep = true;
   config.recover = true;
   config.hand = false;
+  return config;
+}
+
+/// one frame of the app loop at 60 Hz
+void runFrame(engine::AppSession& session) {
+  session.applyRequests();
+  session.startSteps(1.0 / 60.0, 1e9);
+  session.finishSteps();
+}
+
+}  // namespace
+
+TEST(RecoveryTest, ARollbackKeepsAPendingParameterPendingSmall) {
+  // a particle radius edited in the panel waits for a reset (not live); snapshots taken after the edit keep
+  // it as an edit. A rollback to one of them must leave it pending, not hand it to the running simulation
+  // (its particles were built for the old radius, and their supports follow from it)
+  engine::SessionConfig config = recoveringConfig();
   engine::AppSession session(config);
-  auto frame = [&session] {
-    session.applyRequests();
-    session.startSteps(1.0 / 60.0, 1e9);
-    session.finishSteps();
-  };
+  auto frame = [&session] { runFrame(session); };
   const double radius = session.simulation().params().particleRadius;
   session.editParams().particleRadius = 1.25 * radius;
   for (int k = 0; k < 40; ++k)
@@ -338,18 +351,9 @@ TEST(RecoveryTest, AnAbsurdLiveParameterRollsBackToTheLastSnapshotAndRunsOn) {
   // the window's session (recover on): an instability restores the newest in-memory snapshot and halves the
   // time-step cap for a second, instead of pausing with an error; max_speed at its minimum is the absurd
   // value
-  engine::SessionConfig config;
-  config.scenePath = engine::assetPath("assets/scenes/tiny_dam_break.json");
-  config.mode = "fluidplaying";
-  config.fixedStep = true;
-  config.recover = true;
-  config.hand = false;
+  engine::SessionConfig config = recoveringConfig();
   engine::AppSession session(config);
-  auto frame = [&session] {
-    session.applyRequests();
-    session.startSteps(1.0 / 60.0, 1e9);
-    session.finishSteps();
-  };
+  auto frame = [&session] { runFrame(session); };
   for (int k = 0; k < 40; ++k)
     frame();
   ASSERT_EQ(session.error(), "");
@@ -402,9 +406,7 @@ TEST(RecoveryTest, AnAbsurdLiveParameterRollsBackToTheLastSnapshotAndRunsOn) {
   // without snapshots (an instability in the first frame) the scene is reset, still no pause
   engine::AppSession fresh(config);
   fresh.editParams().maxSpeed = sim::ParamTable::sim().at("max_speed").min;
-  fresh.applyRequests();
-  fresh.startSteps(1.0 / 60.0, 1e9);
-  fresh.finishSteps();
+  runFrame(fresh);
   EXPECT_EQ(fresh.error(), "");
   EXPECT_EQ(fresh.recovery().rollbacks, 1);
   EXPECT_NE(fresh.recovery().message.find("reset"), std::string::npos) << fresh.recovery().message;
@@ -415,9 +417,7 @@ TEST(RecoveryTest, AnAbsurdLiveParameterRollsBackToTheLastSnapshotAndRunsOn) {
   config.recover = false;
   engine::AppSession headless(config);
   headless.editParams().maxSpeed = sim::ParamTable::sim().at("max_speed").min;
-  headless.applyRequests();
-  headless.startSteps(1.0 / 60.0, 1e9);
-  headless.finishSteps();
+  runFrame(headless);
   EXPECT_NE(headless.error().find("max_speed"), std::string::npos) << headless.error();
   EXPECT_TRUE(headless.paused);
 }
