@@ -336,8 +336,6 @@ void LevelEstimator::compute(ParticleSet& p, const NeighborList& fluidNbrs, cons
         },
         [](double a, double b) { return std::max(a, b); });
   }
-  // a margin for particles that speed up between the levels and their split
-  constexpr double kCflSpeedMargin = 1.1;
   // the step a fine particle allows at unit speed, and the target step: the surface's, at most dt_max
   const double fineLimit = params.cflFactor * 2.0 * double(r);
   const double dtTarget =

@@ -34,6 +34,14 @@ Real supportForMass(Real m, Real mFine, Real fineRadius);
 void detectSurface(ParticleSet& p, const NeighborList& fluidNbrs, const NeighborList& boundaryNbrs,
                    const BoundarySet& boundary);
 
+/// The CFL limit of refinement (cfl_limited_refinement): a particle that vorticity or velocity difference
+/// refines keeps a mass at which it allows kCflSpeedMargin times the step of the fine surface at its speed of
+/// the levels' step. The margin covers the particles that speed up between that step and their split,
+/// levels_period (8) adaptation steps and split_delay (13) steps later: on the propeller at r = 0.0088 m (2
+/// s, 2 threads) a margin of 1.1 left interior split children setting the step in 377 of 519 steps, at 0.65
+/// of the surface's step on average; 1.5 took 486 steps, with the same particle share, splash and orientation
+/// gain (docs/method.md, Levels).
+inline constexpr double kCflSpeedMargin = 1.5;
 /// Computes the levels of every particle. Owns its scratch arrays.
 class LevelEstimator {
  public:

@@ -679,6 +679,84 @@ TEST(LevelsTest, SurfaceOfARestingBlockIsItsTopFaceAndPhiGrowsWithDepthSmall) {
   }
 }
 
+TEST(LevelsTest, RefinementForDynamicsKeepsAMarginOnTheSurfacesTimeStepSmall) {
+  // cfl_limited_refinement: the resting block sheared (v_x = U + S (top - y), vorticity S, slowest at the
+  // surface).
+  // Deep particles are refined for their vorticity, but a particle moving at v keeps the mass at which its
+  // own step, cfl (H / 2) / v, is kCflSpeedMargin times the surface's step, no finer; the slow ones keep the
+  // vorticity's refinement.
+  SceneDesc scene;
+  scene.params.particleRadius = 0.1 / 10.4;
+  ColliderDesc tank;
+  tank.shape = ShapeType::Box;
+  tank.container = true;
+  tank.halfExtents = Vec3d(0.1, 0.15, 0.1);
+  tank.position = Vec3d(0, 0.15, 0);
+  scene.colliders.push_back(tank);
+  scene.fluid.push_back(FluidBlock{Aabb(Vec3d(-0.1, 0, -0.1), Vec3d(0.1, 0.24, 0.1)), Vec3d::Zero()});
+  scene.domain = Aabb(Vec3d(-0.15, -0.05, -0.15), Vec3d(0.15, 0.35, 0.15));
+  Simulation sim(scene);
+  sim.step();
+  ASSERT_TRUE(sim.neighborsValid());
+  ParticleSet p = sim.particles();
+  p.setAdaptivityFields(true);
+  const Real mFine = sim.latticeMass();
+  // a held optimal mass far from every target: the hysteresis keeps none of them
+  std::fill(p.mOpt.begin(), p.mOpt.end(), Real(1000) * mFine);
+  Real top = 0;
+  for (const Vec3& x : p.x)
+    top = std::max(top, x.y());
+  const double shear = 12.0;  // 1/s: between vorticity_lo and vorticity_hi
+  const double drift = 0.5;   // m/s
+  for (std::size_t i = 0; i < p.size(); ++i)
+    p.v[i] = Vec3(Real(drift + shear * double(top - p.x[i].y())), 0, 0);
+  SimParams params = scene.params;
+  ASSERT_TRUE(params.cflLimitedRefinement);
+  std::vector<Real> target;
+  LevelEstimator levels;
+  levels.compute(p, sim.fluidNeighbors(), sim.boundaryNeighbors(), sim.boundary(), params,
+                 AdaptivityMode::FluidPlaying, mFine, target);
+  const double r = double(Real(params.particleRadius));
+  const double mBase = double(mFine) * params.massRatio;
+  // the surface's step: its fastest particle's (phi within surface_distance_lo)
+  double surfaceSpeed = 0.0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    if (p.phi[i] <= Real(params.surfaceDistanceLo * Real(r)))
+      surfaceSpeed = std::max(surfaceSpeed, double(p.v[i].norm()));
+  }
+  const double fineLimit = params.cflFactor * 2.0 * r;
+  const double dtSurface = surfaceSpeed > 0 ? std::min(params.dtMax, fineLimit / surfaceSpeed) : params.dtMax;
+  int refined = 0, limited = 0, free = 0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    if (p.flags[i] & kFlagSurface)
+      continue;
+    const double mSurface = optimalMass(p.levelPhi[i], 1.0, 1.0, double(mFine), mBase);
+    const double mDynamic = optimalMass(p.levelPhi[i], p.levelOmega[i], p.levelNu[i], double(mFine), mBase);
+    if (!(mDynamic < mSurface * (1.0 - 1e-6)))
+      continue;  // not refined for its dynamics
+    ++refined;
+    const double t = double(target[i]);
+    const double speed = double(p.v[i].norm());
+    // the particle's own step at its target mass, against the surface's
+    const double dtOwn = params.cflFactor * 0.5 * double(supportForMass(Real(t), mFine, Real(r))) / speed;
+    if (t > mDynamic * (1.0 + 1e-4)) {
+      ++limited;
+      if (t < mSurface * (1.0 - 1e-4))  // coarsened to its CFL mass, not to the visible level's
+        EXPECT_NEAR(dtOwn, kCflSpeedMargin * dtSurface, 1e-3 * dtSurface) << "particle " << i;
+      else
+        EXPECT_GE(dtOwn, kCflSpeedMargin * dtSurface * (1.0 - 1e-3)) << "particle " << i;
+    } else {
+      ++free;
+      EXPECT_NEAR(t, mDynamic, 1e-4 * mDynamic) << "particle " << i;
+      // refined as far as its vorticity asks: it still allows the margin on the surface's step
+      EXPECT_GE(dtOwn, kCflSpeedMargin * dtSurface * (1.0 - 1e-3)) << "particle " << i;
+    }
+  }
+  EXPECT_GT(refined, 300);
+  EXPECT_GT(limited, 30) << "of " << refined << " refined particles";
+  EXPECT_GT(free, 30) << "of " << refined << " refined particles";
+}
+
 TEST(LevelsTest, PhiStaysTheExactSurfaceDistanceStepAfterStepSmall) {
   // The same resting block, its levels computed again and again as during a run (after the first call, two
   // Jacobi passes per call): phi must stay the exact distance to the top face at every depth, not drift a hop
