@@ -88,54 +88,130 @@ std::vector<Vec3> Adaptivity::childPositions(const AdaptContext& ctx, std::size_
   return x;
 }
 
+namespace {
+
+/// What splitError() evaluates of one parent, the same for every candidate orientation of its split: per
+/// fluid neighbour its position, the kernel constants of its pair support with the parent (which is the
+/// children's: they start with the parent's support), its volume and the parent's own term of its density
+/// change; per boundary neighbour its position and pair-scaled volume. planSplit() gathers them once for its
+/// up to orientation_candidates + orientation_refinement candidates. Every term is rounded as the direct sums
+/// round it, so the errors are the same bit for bit.
+class SplitErrorTerms {
+ public:
+  SplitErrorTerms(const AdaptContext& ctx, std::size_t o, std::size_t children) {
+    const ParticleSet& p = ctx.fluid;
+    const Real rho0 = Real(ctx.params.restDensity);
+    const Real Vo = p.m[o] / rho0;
+    m_Vs = Vo / Real(children);
+    const Real Ho = p.H[o];
+    // The error of the state the solver then simulates: a split gives its children the parent's support,
+    // which blends down to their own over the following steps (blendSupports).
+    const Real Hs = Ho;
+    m_invHs = Real(1) / Hs;
+    m_kHs = CubicSpline::factor(m_invHs);
+    const Real Hsb = pairSupport(Hs, ctx.boundary.support());
+    m_invHsb = Real(1) / Hsb;
+    m_kHsb = CubicSpline::factor(m_invHsb);
+    const std::uint32_t f0 = ctx.fluidNbrs.offsets[o], f1 = ctx.fluidNbrs.offsets[o + 1];
+    m_fluid.resize(f1 - f0);
+    for (std::uint32_t k = f0; k < f1; ++k) {
+      const std::uint32_t j = ctx.fluidNbrs.indices[k];
+      Fluid& f = m_fluid[k - f0];
+      f.x = p.x[j];
+      const Real H = pairSupport(p.H[j], Ho);
+      f.invH = Real(1) / H;
+      f.k = CubicSpline::factor(f.invH);
+      // beyond (1 + 5e-5) H the kernel is zero for certain (q >= 1 however r and 1 / H round)
+      f.reach2 = H * H * Real(1.0001);
+      f.volume = p.m[j] / rho0;
+      f.tau0 = -double(Vo) * CubicSpline::w((p.x[j] - p.x[o]).norm(), H);
+    }
+    const double sb = double(ctx.boundary.volumeScale(Hs));
+    const std::uint32_t b0 = ctx.boundaryNbrs.offsets[o], b1 = ctx.boundaryNbrs.offsets[o + 1];
+    m_walls.resize(b1 - b0);
+    for (std::uint32_t k = b0; k < b1; ++k) {
+      const std::uint32_t b = ctx.boundaryNbrs.indices[k];
+      m_walls[k - b0] = Wall{ctx.boundary.x[b], sb * double(ctx.boundary.psi[b])};
+    }
+    m_keep = 1.0 - double(Adaptivity::splitBlendWeight(0, ctx.params.splitBlendSteps));
+    m_target = double(p.rho[o]) / double(rho0);
+  }
+
+  /// E of the children at `children` (as many as the constructor was given), stopping once the partial sum
+  /// exceeds `bound` (see Adaptivity::splitError)
+  double error(const std::vector<Vec3>& children, double bound) const {
+    const std::size_t n = children.size();
+    const std::size_t nf = m_fluid.size();
+    // W between each fluid neighbour and each child, row by row: the neighbours' sums use them first, the
+    // children's sums then reuse them (|x_j - x_s| is |x_s - x_j| and the pair support is symmetric)
+    thread_local std::vector<Real> wFluid;
+    thread_local std::vector<Real> wChildren;
+    wFluid.resize(nf * n);
+    double e = 0.0;
+    // tau_j: the neighbours' density change
+    for (std::size_t k = 0; k < nf; ++k) {
+      const Fluid& f = m_fluid[k];
+      Real* row = wFluid.data() + k * n;
+      double tau = f.tau0;
+      for (std::size_t s = 0; s < n; ++s) {
+        const Real d2 = (f.x - children[s]).squaredNorm();
+        row[s] = d2 > f.reach2 ? Real(0) : CubicSpline::wScaled(std::sqrt(d2), f.invH, f.k);
+        tau += double(m_Vs) * row[s];
+      }
+      e += tau * tau;
+      if (e > bound)
+        return e;
+    }
+    // tau_s: the children's density error against the parent's density; W between children is symmetric
+    wChildren.resize(n * n);
+    for (std::size_t s = 0; s < n; ++s) {
+      wChildren[s * n + s] = CubicSpline::wScaled(Real(0), m_invHs, m_kHs);
+      for (std::size_t t = s + 1; t < n; ++t) {
+        const Real w = CubicSpline::wScaled((children[s] - children[t]).norm(), m_invHs, m_kHs);
+        wChildren[s * n + t] = w;
+        wChildren[t * n + s] = w;
+      }
+    }
+    for (std::size_t s = 0; s < n; ++s) {
+      const Vec3& xs = children[s];
+      double rho = 0.0;
+      for (std::size_t t = 0; t < n; ++t)
+        rho += double(m_Vs) * wChildren[s * n + t];
+      for (std::size_t k = 0; k < nf; ++k)
+        rho += double(m_fluid[k].volume) * wFluid[k * n + s];
+      for (const Wall& b : m_walls)
+        rho += b.volume * CubicSpline::wScaled((xs - b.x).norm(), m_invHsb, m_kHsb);
+      // with temporal blending the solver sees the child's density moved (beta) towards the parent's, which
+      // at the split is the target: its error enters at (1 - beta)
+      const double tau = m_keep * (rho - m_target);
+      e += tau * tau;
+      if (e > bound)
+        return e;
+    }
+    return e;
+  }
+
+ private:
+  struct Fluid {
+    Vec3 x;
+    Real invH, k, reach2, volume;
+    double tau0;
+  };
+  struct Wall {
+    Vec3 x;
+    double volume;
+  };
+  std::vector<Fluid> m_fluid;
+  std::vector<Wall> m_walls;
+  Real m_Vs, m_invHs, m_kHs, m_invHsb, m_kHsb;
+  double m_keep, m_target;
+};
+
+}  // namespace
+
 double Adaptivity::splitError(const AdaptContext& ctx, std::size_t o, const std::vector<Vec3>& children,
                               double bound) {
-  const ParticleSet& p = ctx.fluid;
-  const Real rho0 = Real(ctx.params.restDensity);
-  const Real Vo = p.m[o] / rho0;
-  const Real Vs = Vo / Real(children.size());
-  const Real Ho = p.H[o];
-  // The error of the state the solver then simulates: a split gives its children the parent's support, which
-  // blends down to their own over the following steps (blendSupports).
-  const Real Hs = Ho;
-  const Real Hb = ctx.boundary.support();
-  double e = 0.0;
-  // tau_j: the neighbours' density change
-  for (std::uint32_t k = ctx.fluidNbrs.offsets[o]; k < ctx.fluidNbrs.offsets[o + 1]; ++k) {
-    const std::uint32_t j = ctx.fluidNbrs.indices[k];
-    double tau = -double(Vo) * CubicSpline::w((p.x[j] - p.x[o]).norm(), pairSupport(p.H[j], Ho));
-    const Real Hjs = pairSupport(p.H[j], Hs);
-    for (const Vec3& xs : children)
-      tau += double(Vs) * CubicSpline::w((p.x[j] - xs).norm(), Hjs);
-    e += tau * tau;
-    if (e > bound)
-      return e;
-  }
-  // tau_s: the children's density error against the parent's density
-  const Real blend = splitBlendWeight(0, ctx.params.splitBlendSteps);
-  const double target = double(p.rho[o]) / double(rho0);
-  for (const Vec3& xs : children) {
-    double rho = 0.0;
-    for (const Vec3& xt : children)
-      rho += double(Vs) * CubicSpline::w((xs - xt).norm(), Hs);
-    for (std::uint32_t k = ctx.fluidNbrs.offsets[o]; k < ctx.fluidNbrs.offsets[o + 1]; ++k) {
-      const std::uint32_t j = ctx.fluidNbrs.indices[k];
-      rho += double(p.m[j] / rho0) * CubicSpline::w((xs - p.x[j]).norm(), pairSupport(Hs, p.H[j]));
-    }
-    const Real Hsb = pairSupport(Hs, Hb);
-    const double sb = double(ctx.boundary.volumeScale(Hs));
-    for (std::uint32_t k = ctx.boundaryNbrs.offsets[o]; k < ctx.boundaryNbrs.offsets[o + 1]; ++k) {
-      const std::uint32_t b = ctx.boundaryNbrs.indices[k];
-      rho += sb * double(ctx.boundary.psi[b]) * CubicSpline::w((xs - ctx.boundary.x[b]).norm(), Hsb);
-    }
-    // with temporal blending the solver sees the child's density moved (beta) towards the parent's, which
-    // at the split is the target: its error enters at (1 - beta)
-    const double tau = (1.0 - double(blend)) * (rho - target);
-    e += tau * tau;
-    if (e > bound)
-      return e;
-  }
-  return e;
+  return SplitErrorTerms(ctx, o, children.size()).error(children, bound);
 }
 
 void Adaptivity::planSplit(const AdaptContext& ctx, SplitPlan& plan) const {
@@ -208,6 +284,7 @@ void Adaptivity::planSplit(const AdaptContext& ctx, SplitPlan& plan) const {
   // bound): the same choice, bit for bit, at less cost.
   constexpr double kNoBound = std::numeric_limits<double>::infinity();
   const int candidates = std::clamp(ctx.params.orientationCandidates, 1, kMaxCandidates);
+  const SplitErrorTerms terms(ctx, o, std::size_t(plan.n));
   plan.chosen = -1;
   plan.errorUnrotated = -1.0;
   for (int k = 0; k < candidates; ++k) {
@@ -216,7 +293,7 @@ void Adaptivity::planSplit(const AdaptContext& ctx, SplitPlan& plan) const {
     if (!valid(children))
       continue;
     // (the first candidate evaluated is evaluated whole: k = 0's error is the unrotated one reported)
-    const double e = splitError(ctx, o, children, plan.chosen < 0 ? kNoBound : plan.errorChosen);
+    const double e = terms.error(children, plan.chosen < 0 ? kNoBound : plan.errorChosen);
     if (k == 0)
       plan.errorUnrotated = e;
     if (plan.chosen < 0 || e < plan.errorChosen) {
@@ -239,7 +316,7 @@ void Adaptivity::planSplit(const AdaptContext& ctx, SplitPlan& plan) const {
     const std::vector<Vec3> children = childPositions(ctx, o, plan.n, rot);
     bool better = false;
     if (valid(children)) {
-      const double e = splitError(ctx, o, children, plan.errorChosen);
+      const double e = terms.error(children, plan.errorChosen);
       if (e < plan.errorChosen) {
         plan.errorChosen = e;
         plan.rotation = rot;

@@ -13,8 +13,16 @@ struct CubicSpline {
   /// W(r, H) [1/m^3]; zero for r >= H
   static Real w(Real r, Real H) {
     const Real invH = Real(1) / H;
+    return wScaled(r, invH, factor(invH));
+  }
+
+  /// (8 / pi) / H^3 from 1 / H, rounded as w() rounds it
+  static Real factor(Real invH) { return Real(8.0 / kPi) * invH * invH * invH; }
+
+  /// W(r, H) from 1 / H and factor(1 / H): the same value, bit for bit, for callers that evaluate many
+  /// distances with one support
+  static Real wScaled(Real r, Real invH, Real k) {
     const Real q = r * invH;
-    const Real k = Real(8.0 / kPi) * invH * invH * invH;
     if (q <= Real(0.5))
       return k * (Real(6) * q * q * (q - Real(1)) + Real(1));
     if (q < Real(1)) {

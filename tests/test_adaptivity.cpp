@@ -475,6 +475,71 @@ TEST(AdaptivityTest, ABoundedSplitErrorStopsAtItsBoundAndIsExactBelowItSmall) {
   EXPECT_GT(stopped, 100u);
 }
 
+/// E of a split written out as docs/method.md states it, kernel by kernel (the children with the parent's
+/// support, their density error weighted by 1 - the blend weight at the split), the reference for the split
+/// error's precomputed terms
+double directSplitError(const AdaptContext& ctx, std::size_t o, const std::vector<Vec3>& children) {
+  const ParticleSet& p = ctx.fluid;
+  const Real rho0 = Real(ctx.params.restDensity);
+  const Real Vo = p.m[o] / rho0;
+  const Real Vs = Vo / Real(children.size());
+  const Real Hs = p.H[o];
+  double e = 0.0;
+  for (std::uint32_t k = ctx.fluidNbrs.offsets[o]; k < ctx.fluidNbrs.offsets[o + 1]; ++k) {
+    const std::uint32_t j = ctx.fluidNbrs.indices[k];
+    double tau = -double(Vo) * CubicSpline::w((p.x[j] - p.x[o]).norm(), pairSupport(p.H[j], p.H[o]));
+    for (const Vec3& xs : children)
+      tau += double(Vs) * CubicSpline::w((p.x[j] - xs).norm(), pairSupport(p.H[j], Hs));
+    e += tau * tau;
+  }
+  const double keep = 1.0 - double(Adaptivity::splitBlendWeight(0, ctx.params.splitBlendSteps));
+  for (const Vec3& xs : children) {
+    double rho = 0.0;
+    for (const Vec3& xt : children)
+      rho += double(Vs) * CubicSpline::w((xs - xt).norm(), Hs);
+    for (std::uint32_t k = ctx.fluidNbrs.offsets[o]; k < ctx.fluidNbrs.offsets[o + 1]; ++k) {
+      const std::uint32_t j = ctx.fluidNbrs.indices[k];
+      rho += double(p.m[j] / rho0) * CubicSpline::w((xs - p.x[j]).norm(), pairSupport(Hs, p.H[j]));
+    }
+    const double sb = double(ctx.boundary.volumeScale(Hs));
+    for (std::uint32_t k = ctx.boundaryNbrs.offsets[o]; k < ctx.boundaryNbrs.offsets[o + 1]; ++k) {
+      const std::uint32_t b = ctx.boundaryNbrs.indices[k];
+      rho += sb * double(ctx.boundary.psi[b]) *
+             CubicSpline::w((xs - ctx.boundary.x[b]).norm(), pairSupport(Hs, ctx.boundary.support()));
+    }
+    const double tau = keep * (rho - double(p.rho[o]) / double(rho0));
+    e += tau * tau;
+  }
+  return e;
+}
+
+TEST(AdaptivityTest, TheSplitErrorIsItsDirectSumBitForBitSmall) {
+  // splitError gathers each parent's terms once for all its candidates, evaluates each neighbour-child kernel
+  // once for both sums and each pair of children once, and skips the kernels beyond the support: the same
+  // number, bit for bit, as the sum written out, for parents with and without wall neighbours
+  Neighbourhood nb(11);
+  const AdaptContext ctx = nb.context(0.0);
+  const double r = nb.params.particleRadius;
+  std::size_t withWalls = 0, compared = 0;
+  for (std::size_t o = 0; o < nb.p.size(); o += 5) {
+    withWalls += nb.boundaryNbrs.count(o) > 0 ? 1 : 0;
+    for (int n : {2, 3, 5, 8, 27}) {
+      const double radius = r * std::cbrt(double(nb.p.m[o]) / double(nb.mFine));
+      const Quatd rot(Eigen::AngleAxisd(0.3 + 0.2 * n, Vec3d(3, -1, 2).normalized()));
+      std::vector<Vec3> children;
+      for (const Vec3d& offset : SplitTemplates::get().offsets(n))
+        children.push_back((nb.p.x[o].cast<double>() + radius * (rot * offset)).cast<Real>());
+      const double direct = directSplitError(ctx, o, children);
+      ASSERT_GT(direct, 0.0);
+      EXPECT_EQ(Adaptivity::splitError(ctx, o, children), direct)
+          << "parent " << o << ", " << n << " children";
+      ++compared;
+    }
+  }
+  EXPECT_GT(compared, 500u);
+  EXPECT_GT(withWalls, 20u);
+}
+
 TEST(AdaptivityTest, OrientationChoiceLowersTheSplitDensityErrorSmall) {
   // The reported errors (the plans') and the children really placed: each split's children, at the tail of
   // the set in plan order, are scored again with the public split error on an untouched copy of the
