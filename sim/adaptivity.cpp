@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cassert>
 #include <cmath>
 
 #include "sim/kernels.h"
@@ -98,7 +99,7 @@ namespace {
 /// round it, so the errors are the same bit for bit.
 class SplitErrorTerms {
  public:
-  SplitErrorTerms(const AdaptContext& ctx, std::size_t o, std::size_t children) {
+  SplitErrorTerms(const AdaptContext& ctx, std::size_t o, std::size_t children) : m_children(children) {
     const ParticleSet& p = ctx.fluid;
     const Real rho0 = Real(ctx.params.restDensity);
     const Real Vo = p.m[o] / rho0;
@@ -140,7 +141,9 @@ class SplitErrorTerms {
   /// E of the children at `children` (as many as the constructor was given), stopping once the partial sum
   /// exceeds `bound` (see Adaptivity::splitError)
   double error(const std::vector<Vec3>& children, double bound) const {
-    const std::size_t n = children.size();
+    // (as many children as the terms were gathered for: their volume V_s is the parent's over that count)
+    const std::size_t n = m_children;
+    assert(children.size() == n);
     const std::size_t nf = m_fluid.size();
     // W between each fluid neighbour and each child, row by row: the neighbours' sums use them first, the
     // children's sums then reuse them (|x_j - x_s| is |x_s - x_j| and the pair support is symmetric)
@@ -165,7 +168,8 @@ class SplitErrorTerms {
     // tau_s: the children's density error against the parent's density; W between children is symmetric
     wChildren.resize(n * n);
     for (std::size_t s = 0; s < n; ++s) {
-      wChildren[s * n + s] = CubicSpline::wScaled(Real(0), m_invHs, m_kHs);
+      // (as |x_s - x_s|, so that a child at a non-finite position gives what the direct sum gives)
+      wChildren[s * n + s] = CubicSpline::wScaled((children[s] - children[s]).norm(), m_invHs, m_kHs);
       for (std::size_t t = s + 1; t < n; ++t) {
         const Real w = CubicSpline::wScaled((children[s] - children[t]).norm(), m_invHs, m_kHs);
         wChildren[s * n + t] = w;
@@ -204,6 +208,7 @@ class SplitErrorTerms {
   std::vector<Fluid> m_fluid;
   std::vector<Wall> m_walls;
   Real m_Vs, m_invHs, m_kHs, m_invHsb, m_kHsb;
+  std::size_t m_children;
   double m_keep, m_target;
 };
 
