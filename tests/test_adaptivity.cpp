@@ -673,11 +673,13 @@ TEST(AdaptivityTest, SupportsBlendTowardsTheirMassSmall) {
   EXPECT_EQ(p.H[0], target);
 }
 
-TEST(LevelsTest, SurfaceOfARestingBlockIsItsTopFaceAndPhiGrowsWithDepthSmall) {
-  // a block of water at rest in a closed tank: its free surface is the top face only (walls are not a
-  // surface)
+namespace {
+
+/// A block of water at rest in a closed tank (r = 0.1 / 10.4 puts the lattice 2.4 r from the walls, where
+/// they hold it)
+SceneDesc restingBlockScene() {
   SceneDesc scene;
-  scene.params.particleRadius = 0.1 / 10.4;  // puts the lattice 2.4 r from the walls, where they hold it
+  scene.params.particleRadius = 0.1 / 10.4;
   ColliderDesc tank;
   tank.shape = ShapeType::Box;
   tank.container = true;
@@ -686,14 +688,37 @@ TEST(LevelsTest, SurfaceOfARestingBlockIsItsTopFaceAndPhiGrowsWithDepthSmall) {
   scene.colliders.push_back(tank);
   scene.fluid.push_back(FluidBlock{Aabb(Vec3d(-0.1, 0, -0.1), Vec3d(0.1, 0.24, 0.1)), Vec3d::Zero()});
   scene.domain = Aabb(Vec3d(-0.15, -0.05, -0.15), Vec3d(0.15, 0.35, 0.15));
-  Simulation sim(scene);
-  sim.step();  // uniform resolution: the lists of the step still index the particles
-  ParticleSet p = sim.particles();
-  p.setAdaptivityFields(true);  // a uniform run holds none: the estimator's fields at their defaults
+  return scene;
+}
+
+/// The block simulated one step at uniform resolution (the lists of the step still index its particles), and
+/// a copy of its particles with the level estimator's fields at their defaults (a uniform run holds none)
+struct RestingBlock {
+  explicit RestingBlock(const SceneDesc& s) : scene(s), sim(s) {
+    sim.step();
+    p = sim.particles();
+    p.setAdaptivityFields(true);
+    for (const Vec3& x : p.x)
+      top = std::max(top, x.y());
+  }
+  SceneDesc scene;
+  Simulation sim;
+  ParticleSet p;
+  Real top = 0;  // the highest particle's height [m]
+};
+
+}  // namespace
+
+TEST(LevelsTest, SurfaceOfARestingBlockIsItsTopFaceAndPhiGrowsWithDepthSmall) {
+  // a block of water at rest in a closed tank: its free surface is the top face only (walls are not a
+  // surface)
+  RestingBlock block(restingBlockScene());
+  const SceneDesc& scene = block.scene;
+  const Simulation& sim = block.sim;
+  ASSERT_TRUE(sim.neighborsValid());
+  ParticleSet& p = block.p;
   const Real r = Real(scene.params.particleRadius);
-  Real top = 0;
-  for (const Vec3& x : p.x)
-    top = std::max(top, x.y());
+  const Real top = block.top;
   SimParams params = scene.params;
   std::vector<Real> target;
   LevelEstimator levels;
@@ -750,27 +775,15 @@ TEST(LevelsTest, RefinementForDynamicsKeepsAMarginOnTheSurfacesTimeStepSmall) {
   // Deep particles are refined for their vorticity, but a particle moving at v keeps the mass at which its
   // own step, cfl (H / 2) / v, is kCflSpeedMargin times the surface's step, no finer; the slow ones keep the
   // vorticity's refinement.
-  SceneDesc scene;
-  scene.params.particleRadius = 0.1 / 10.4;
-  ColliderDesc tank;
-  tank.shape = ShapeType::Box;
-  tank.container = true;
-  tank.halfExtents = Vec3d(0.1, 0.15, 0.1);
-  tank.position = Vec3d(0, 0.15, 0);
-  scene.colliders.push_back(tank);
-  scene.fluid.push_back(FluidBlock{Aabb(Vec3d(-0.1, 0, -0.1), Vec3d(0.1, 0.24, 0.1)), Vec3d::Zero()});
-  scene.domain = Aabb(Vec3d(-0.15, -0.05, -0.15), Vec3d(0.15, 0.35, 0.15));
-  Simulation sim(scene);
-  sim.step();
+  RestingBlock block(restingBlockScene());
+  const SceneDesc& scene = block.scene;
+  const Simulation& sim = block.sim;
   ASSERT_TRUE(sim.neighborsValid());
-  ParticleSet p = sim.particles();
-  p.setAdaptivityFields(true);
+  ParticleSet& p = block.p;
   const Real mFine = sim.latticeMass();
   // a held optimal mass far from every target: the hysteresis keeps none of them
   std::fill(p.mOpt.begin(), p.mOpt.end(), Real(1000) * mFine);
-  Real top = 0;
-  for (const Vec3& x : p.x)
-    top = std::max(top, x.y());
+  const Real top = block.top;
   const double shear = 12.0;  // 1/s: between vorticity_lo and vorticity_hi
   const double drift = 0.5;   // m/s
   for (std::size_t i = 0; i < p.size(); ++i)
@@ -826,26 +839,15 @@ TEST(LevelsTest, PhiStaysTheExactSurfaceDistanceStepAfterStepSmall) {
   // The same resting block, its levels computed again and again as during a run (after the first call, two
   // Jacobi passes per call): phi must stay the exact distance to the top face at every depth, not drift a hop
   // too far beyond the reach of the passes. (A cap of 16 r: eight layers deep.)
-  SceneDesc scene;
-  scene.params.particleRadius = 0.1 / 10.4;
-  scene.params.surfaceDistanceHi = 16.0;
-  ColliderDesc tank;
-  tank.shape = ShapeType::Box;
-  tank.container = true;
-  tank.halfExtents = Vec3d(0.1, 0.15, 0.1);
-  tank.position = Vec3d(0, 0.15, 0);
-  scene.colliders.push_back(tank);
-  scene.fluid.push_back(FluidBlock{Aabb(Vec3d(-0.1, 0, -0.1), Vec3d(0.1, 0.24, 0.1)), Vec3d::Zero()});
-  scene.domain = Aabb(Vec3d(-0.15, -0.05, -0.15), Vec3d(0.15, 0.35, 0.15));
-  Simulation sim(scene);
-  sim.step();
+  SceneDesc blockScene = restingBlockScene();
+  blockScene.params.surfaceDistanceHi = 16.0;
+  RestingBlock block(blockScene);
+  const SceneDesc& scene = block.scene;
+  const Simulation& sim = block.sim;
   ASSERT_TRUE(sim.neighborsValid());
-  ParticleSet p = sim.particles();
-  p.setAdaptivityFields(true);  // a uniform run holds none: the estimator's fields at their defaults
+  ParticleSet& p = block.p;
   const Real r = Real(scene.params.particleRadius);
-  Real top = 0;
-  for (const Vec3& x : p.x)
-    top = std::max(top, x.y());
+  const Real top = block.top;
   std::vector<Real> target;
   LevelEstimator levels;
   for (int call = 0; call < 8; ++call)
