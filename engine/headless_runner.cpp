@@ -108,8 +108,9 @@ void printSummary(std::ostream& out, const RunSummary& s) {
       << s.divergenceIterationsMean << " per step\n"
       << "adaptivity           " << s.adaptivity.splits << " splits, " << s.adaptivity.merges << " merges, "
       << s.adaptivity.redistributions << " redistributions, split error -"
-      << 100.0 * s.adaptivity.splitErrorReduction() << " % by orientation, " << 100.0 * s.adaptivityShare
-      << " % of step time\n"
+      << 100.0 * s.adaptivity.splitErrorReduction() << " % (-"
+      << 100.0 * s.adaptivity.orientationErrorReduction() << " % by orientation), "
+      << 100.0 * s.adaptivityShare << " % of step time\n"
       << "splash               " << s.splashParticles << " particles a frame, height "
       << 1000.0 * s.splashHeight << " mm (max " << 1000.0 * s.splashHeightMax << "), with splash "
       << 1000.0 * s.splashHeightWithSplash << " mm (max " << 1000.0 * s.splashHeightWithSplashMax << ")\n"

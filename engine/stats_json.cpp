@@ -39,6 +39,7 @@ void writeStatsJson(const std::string& path, const RunSummary& s) {
   j["merges"] = s.adaptivity.merges;
   j["redistributions"] = s.adaptivity.redistributions;
   j["split_error_reduction"] = s.adaptivity.splitErrorReduction();
+  j["split_error_reduction_orientation"] = s.adaptivity.orientationErrorReduction();
   j["adaptivity_share"] = s.adaptivityShare;
   j["splash_particles"] = s.splashParticles;
   j["splash_height"] = s.splashHeight;

@@ -26,10 +26,15 @@ struct AdaptivityStats {
   std::uint64_t splitsCompared = 0;   ///< splits where the unrotated template was valid too
   double splitErrorChosen = 0.0;      ///< sum over compared splits of E of the chosen orientation [-]
   double splitErrorUnrotated = 0.0;   ///< sum over compared splits of E of the unrotated template [-]
+  double splitErrorRotated = 0.0;     ///< sum over compared splits of E of the chosen rotation, unmoved [-]
 
   /// 1 - mean E(chosen) / mean E(unrotated): the density error decrease by the orientation choice [-]
   double splitErrorReduction() const {
     return splitErrorUnrotated > 0.0 ? 1.0 - splitErrorChosen / splitErrorUnrotated : 0.0;
+  }
+  /// 1 - mean E(chosen rotation, children not moved) / mean E(unrotated): the orientation's part [-]
+  double orientationErrorReduction() const {
+    return splitErrorUnrotated > 0.0 ? 1.0 - splitErrorRotated / splitErrorUnrotated : 0.0;
   }
   /// adds another set of counts
   AdaptivityStats& operator+=(const AdaptivityStats& o);
@@ -97,6 +102,11 @@ class Adaptivity {
   /// bound never stops it, whatever the terms.)
   static double splitError(const AdaptContext& ctx, std::size_t o, const std::vector<Vec3>& children,
                            double bound = std::numeric_limits<double>::infinity());
+  /// E of the children at `children` as splitError() defines it, with its kernels in double precision, and
+  /// its gradient with respect to each child's position in `gradient` [1/m]: what the position refinement
+  /// (`split_position_steps`) descends.
+  static double splitErrorGradient(const AdaptContext& ctx, std::size_t o, const std::vector<Vec3d>& children,
+                                   std::vector<Vec3d>& gradient);
 
   /// per particle, indexed as the particles were at the start of the last adapt() call: what it did there
   const std::vector<ParticleOps>& lastOperations() const { return m_ops; }
@@ -129,8 +139,10 @@ class Adaptivity {
     int n = 0;
     int chosen = -1;                     // candidate index, -1 when every candidate puts a child in a wall
     Quatd rotation = Quatd::Identity();  // the chosen rotation (refined around the chosen candidate's)
-    double errorChosen = 0.0;
+    double errorChosen = 0.0;      // E of the children split: rotated, then moved (split_position_steps)
+    double errorRotated = 0.0;     // E of the chosen rotation before the children moved
     double errorUnrotated = -1.0;  // -1 when the unrotated template is not valid
+    std::vector<Vec3> children;    // the moved children; empty when they stay on the rotated template
   };
   void planSplit(const AdaptContext& ctx, SplitPlan& plan) const;
   static std::vector<Vec3> childPositions(const AdaptContext& ctx, std::size_t o, int n, const Quatd& rot);

@@ -90,6 +90,10 @@ ParamTable::ParamTable() : ParamTableOf<SimParams>("parameter", &ParamTable::val
   add("orientation_refinement", "adaptivity", "-", 0, 64, live,
       "tries turning the best of the K rotations about a random axis, kept when they lower the split error",
       &P::orientationRefinement, 8);
+  add("split_position_steps", "adaptivity", "-", 0, 16, live,
+      "steps moving the children of the chosen orientation down the gradient of the split error (their "
+      "centre kept)",
+      &P::splitPositionSteps, 3);
   add("merge_below", "adaptivity", "-", 0.0, 1.0, live, "m / m_opt below which a particle is merged",
       &P::mergeBelow, 0.51);
   add("light_below", "adaptivity", "-", 0.0, 1.0, live, "m / m_opt below which a particle may receive mass",

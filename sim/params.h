@@ -60,6 +60,7 @@ struct SimParams {
   int splitMaxChildren;
   int orientationCandidates;
   int orientationRefinement;
+  int splitPositionSteps;
   double mergeBelow;
   double lightBelow;
   double mergeReceiversBelow;

@@ -25,6 +25,7 @@
 #include <stdexcept>
 #include <string>
 #include <thread>
+#include <unordered_map>
 #include <vector>
 
 #include "engine/cli.h"
@@ -85,6 +86,48 @@ struct Row {
   std::vector<double> runHeightMean, runHeightMax;           // heightMean and heightMax of every run [m]
   std::vector<double> runOrientationGain;                    // split error reduction of every run
   double pooledErrorChosen = 0, pooledErrorUnrotated = 0;    // the split errors summed over the runs
+  double pooledErrorRotated = 0;  // E of the chosen rotations before the children moved, summed over the runs
+  // the split children's density in the first density pass after their split against their parent's
+  // (|rho_s - rho_o| / rho0, summed over the children) and the children counted, summed over the runs
+  double splitJumpSum = 0;
+  std::uint64_t splitJumpChildren = 0;
+  std::vector<double> runSplitJump;     // the mean jump of every run
+  std::vector<double> runDensityError;  // densityError of every run
+};
+
+/// Follows the children of each split into the solver's next density pass: their density there against the
+/// parent's density they were created with, |rho_s - rho_o| / rho0. This is the density error of a split as
+/// the solver simulates it (the split error E predicts it at the instant of the split).
+class SplitJumpTracker {
+ public:
+  /// call after every step
+  void afterStep(const sim::Simulation& simulation) {
+    const sim::ParticleSet& p = simulation.particles();
+    const double rho0 = simulation.params().restDensity;
+    if (!m_parentRho.empty()) {
+      for (std::size_t i = 0; i < p.size(); ++i) {
+        if (!(p.flags[i] & sim::kFlagSplit))
+          continue;
+        const auto it = m_parentRho.find(p.id[i]);
+        if (it == m_parentRho.end())
+          continue;
+        sum += std::abs(double(p.rho[i]) - it->second) / rho0;
+        ++children;
+      }
+    }
+    // this step's children hold their parent's density (Adaptivity::adapt) until the next density pass
+    m_parentRho.clear();
+    const sim::Real now = sim::Real(simulation.time());
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      if ((p.flags[i] & sim::kFlagSplit) && p.splitTime[i] == now)
+        m_parentRho.emplace(p.id[i], double(p.rho[i]));
+    }
+  }
+  double sum = 0.0;
+  std::uint64_t children = 0;
+
+ private:
+  std::unordered_map<std::uint32_t, double> m_parentRho;
 };
 
 std::string machineDescription() {
@@ -265,12 +308,15 @@ Row runMode(sim::SceneDesc scene, sim::AdaptivityMode mode, double simTime, cons
   };
   const double frameDt = 1.0 / scene.frameRate;
   double wall = 0.0;
+  SplitJumpTracker jumps;
   sample();
   try {
     while (simulation.time() < simTime - 1e-12) {
       const auto start = Clock::now();
       simulation.step();
       wall += std::chrono::duration<double>(Clock::now() - start).count();
+      if (simulation.adaptive())
+        jumps.afterStep(simulation);
       if (simulation.time() >= frame * frameDt - 1e-12)
         sample();
     }
@@ -316,6 +362,11 @@ Row runMode(sim::SceneDesc scene, sim::AdaptivityMode mode, double simTime, cons
   row.runOrientationGain.push_back(row.adaptivity.splitErrorReduction());
   row.pooledErrorChosen = row.adaptivity.splitErrorChosen;
   row.pooledErrorUnrotated = row.adaptivity.splitErrorUnrotated;
+  row.pooledErrorRotated = row.adaptivity.splitErrorRotated;
+  row.splitJumpSum = jumps.sum;
+  row.splitJumpChildren = jumps.children;
+  row.runSplitJump.push_back(jumps.children ? jumps.sum / double(jumps.children) : 0.0);
+  row.runDensityError.push_back(row.densityError);
   return row;
 }
 
@@ -360,6 +411,11 @@ Row runModeRepeated(const sim::SceneDesc& scene, sim::AdaptivityMode mode, doubl
     row.runOrientationGain.push_back(more.adaptivity.splitErrorReduction());
     row.pooledErrorChosen += more.adaptivity.splitErrorChosen;
     row.pooledErrorUnrotated += more.adaptivity.splitErrorUnrotated;
+    row.pooledErrorRotated += more.adaptivity.splitErrorRotated;
+    row.splitJumpSum += more.splitJumpSum;
+    row.splitJumpChildren += more.splitJumpChildren;
+    row.runSplitJump.push_back(more.runSplitJump.front());
+    row.runDensityError.push_back(more.densityError);
   }
   return row;
 }
@@ -605,15 +661,41 @@ int main(int argc, char** argv) {
         "\norientation gain over up to %d runs (split error of the chosen rotation against the unrotated "
         "template's, %%; a mode that went unstable stops its runs)\n",
         runs);
-    std::printf("%-13s %8s %17s  %s\n", "mode", "pooled", "mean +- std", "runs");
+    std::printf("%-13s %8s %9s %17s  %s\n", "mode", "pooled", "rotation", "mean +- std", "runs");
     for (const Row& r : rows) {
       if (r.pooledErrorUnrotated <= 0)
         continue;
       const auto [mean, spread] = meanAndSpread(r.runOrientationGain);
-      std::printf("%-13s %8.1f %8.1f +- %5.1f ", r.mode.c_str(),
-                  100 * (1 - r.pooledErrorChosen / r.pooledErrorUnrotated), 100 * mean, 100 * spread);
+      std::printf("%-13s %8.1f %9.1f %8.1f +- %5.1f ", r.mode.c_str(),
+                  100 * (1 - r.pooledErrorChosen / r.pooledErrorUnrotated),
+                  100 * (1 - r.pooledErrorRotated / r.pooledErrorUnrotated), 100 * mean, 100 * spread);
       for (double g : r.runOrientationGain)
         std::printf(" %.1f", 100 * g);
+      std::printf("\n");
+    }
+    // what the solver then sees of the splits
+    std::printf(
+        "\nsplit children in the next density pass: |rho_child - rho_parent| / rho0, %% (mean over the "
+        "children; pooled, and every run's)\n");
+    std::printf("%-13s %9s %8s %17s  %s\n", "mode", "children", "pooled", "mean +- std", "runs");
+    for (const Row& r : rows) {
+      if (r.splitJumpChildren == 0)
+        continue;
+      const auto [mean, spread] = meanAndSpread(r.runSplitJump);
+      std::printf("%-13s %9llu %8.3f %8.3f +- %5.3f ", r.mode.c_str(),
+                  (unsigned long long)r.splitJumpChildren, 100 * r.splitJumpSum / double(r.splitJumpChildren),
+                  100 * mean, 100 * spread);
+      for (double g : r.runSplitJump)
+        std::printf(" %.3f", 100 * g);
+      std::printf("\n");
+    }
+    std::printf(
+        "\nmean density error of the steps over the runs, %% (the table's dens.err%% is the first run's)\n");
+    for (const Row& r : rows) {
+      const auto [mean, spread] = meanAndSpread(r.runDensityError);
+      std::printf("%-13s %8.4f +- %6.4f ", r.mode.c_str(), 100 * mean, 100 * spread);
+      for (double g : r.runDensityError)
+        std::printf(" %.4f", 100 * g);
       std::printf("\n");
     }
   }

@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstring>
 #include <functional>
+#include <numeric>
 #include <string>
 #include <vector>
 
@@ -168,10 +169,11 @@ TEST(AdaptivePhysicsTest, HandTankAtRestStopsChurningAndStandsNearUniformHigh) {
   // the surface 6.7 mm above (6.8 mm above the settled uniform-high of session 16; bound 7 mm: 5.5 mm when
   // the hysteresis came, 7.3 mm before it; 6.4 mm on cd6cdab, before the divergence solve's warm start
   // skipped particles with fewer than 20 neighbours: the figure moves by tenths of a millimetre with any
-  // change to the solver's trajectory)
+  // change to the solver's trajectory; 7.1 mm since the split children move down the split error's
+  // gradient, `split_position_steps` = 3, against 6.7 mm without: bound 7.5 mm)
   EXPECT_LT(t.splitsMerges, 2.5);
   EXPECT_LT(t.shares, 30.0);
-  EXPECT_LT(std::abs(t.above), 0.007);
+  EXPECT_LT(std::abs(t.above), 0.0075);
 }
 
 // The desktop's default tank (r = 5 mm, 30 fine radii deep against 19 in the coarse one) stands closer to
@@ -451,14 +453,28 @@ TEST(AdaptivePhysicsTest, DroppingMergedParticlesInTheNextSortChangesNothingSmal
       steps.push_back(sim.stepCount());
     }
     EXPECT_EQ(steps[0], steps[1]) << threads << " threads";
-    const ParticleSet& a = results[0];
-    const ParticleSet& b = results[1];
+    // (compared particle by particle in id order: when the last step split or merged, the presorted run is
+    // already in cell order and the other one only compacted, until its next search sorts it)
+    const auto byId = [](const ParticleSet& p) {
+      std::vector<std::size_t> order(p.size());
+      std::iota(order.begin(), order.end(), std::size_t(0));
+      std::sort(order.begin(), order.end(), [&](std::size_t i, std::size_t j) { return p.id[i] < p.id[j]; });
+      ParticleSet sorted;
+      for (std::size_t i : order) {
+        const std::size_t k = sorted.add(p.x[i], p.v[i], p.m[i], p.H[i], p.rho[i]);
+        sorted.id[k] = p.id[i];
+      }
+      return sorted;
+    };
+    const ParticleSet a = byId(results[0]);
+    const ParticleSet b = byId(results[1]);
     ASSERT_EQ(a.size(), b.size()) << threads << " threads";
+    EXPECT_EQ(a.id, b.id) << threads << " threads";
     EXPECT_EQ(std::memcmp(a.x.data(), b.x.data(), a.size() * sizeof(Vec3)), 0) << threads << " threads";
     EXPECT_EQ(std::memcmp(a.v.data(), b.v.data(), a.size() * sizeof(Vec3)), 0) << threads << " threads";
     EXPECT_EQ(std::memcmp(a.m.data(), b.m.data(), a.size() * sizeof(Real)), 0) << threads << " threads";
     EXPECT_EQ(std::memcmp(a.H.data(), b.H.data(), a.size() * sizeof(Real)), 0) << threads << " threads";
-    EXPECT_EQ(a.id, b.id) << threads << " threads";
+    EXPECT_EQ(std::memcmp(a.rho.data(), b.rho.data(), a.size() * sizeof(Real)), 0) << threads << " threads";
   }
 }
 

@@ -556,9 +556,11 @@ TEST(AdaptivityTest, OrientationChoiceLowersTheSplitDensityErrorSmall) {
   for (unsigned seed = 20; seed < 24; ++seed) {
     Neighbourhood nb(seed);
     Neighbourhood ref(seed);
-    // the children's own densities (without the temporal blending's half)
+    // the children's own densities (without the temporal blending's half), on the chosen orientation's
+    // template (MovingTheChildrenLowersTheSplitErrorFromTheChosenRotationSmall moves them)
     nb.params.splitBlendSteps = 0;
     ref.params.splitBlendSteps = 0;
+    nb.params.splitPositionSteps = 0;
     // the parents' densities as the solver sees them: the children are to reproduce them
     DfsphSolver solver;
     for (Neighbourhood* h : {&nb, &ref}) {
@@ -628,6 +630,7 @@ TEST(AdaptivityTest, OrientationRefinementLowersTheChosenSplitErrorSmall) {
     for (int refine : {0, 8}) {
       Neighbourhood nb(seed);
       nb.params.orientationRefinement = refine;
+      nb.params.splitPositionSteps = 0;
       DfsphSolver solver;
       SolverContext ctx{nb.p, nb.boundary, nb.fluidNbrs, nb.boundaryNbrs, nb.params};
       solver.computeDensityAndFactor(ctx);
@@ -649,6 +652,122 @@ TEST(AdaptivityTest, OrientationRefinementLowersTheChosenSplitErrorSmall) {
               100 * gainRefined);
   EXPECT_LE(refined, candidatesOnly);
   EXPECT_GT(gainRefined, gain + 0.02);
+}
+
+TEST(AdaptivityTest, TheSplitErrorGradientIsItsDerivativeSmall) {
+  // the gradient the position refinement descends, against central differences of its own E (double
+  // precision kernels), and that E against splitError's (single precision kernels)
+  Neighbourhood nb(11);
+  const AdaptContext ctx = nb.context(0.0);
+  const double r = nb.params.particleRadius;
+  std::size_t checked = 0;
+  for (std::size_t o = 0; o < nb.p.size(); o += 7) {
+    for (int n : {2, 3, 5, 8}) {
+      const double radius = r * std::cbrt(double(nb.p.m[o]) / double(nb.mFine));
+      const Quatd rot(Eigen::AngleAxisd(0.7 + 0.1 * n, Vec3d(1, 2, -2).normalized()));
+      std::vector<Vec3d> children;
+      std::vector<Vec3> childrenReal;
+      for (const Vec3d& offset : SplitTemplates::get().offsets(n)) {
+        childrenReal.push_back((nb.p.x[o].cast<double>() + radius * (rot * offset)).cast<Real>());
+        children.push_back(childrenReal.back().cast<double>());
+      }
+      std::vector<Vec3d> gradient;
+      const double e = Adaptivity::splitErrorGradient(ctx, o, children, gradient);
+      ASSERT_EQ(gradient.size(), children.size());
+      EXPECT_NEAR(e, Adaptivity::splitError(ctx, o, childrenReal), 1e-4 * e + 1e-12);
+      double largest = 0.0;
+      for (const Vec3d& g : gradient)
+        largest = std::max(largest, g.norm());
+      ASSERT_GT(largest, 0.0);
+      const double h = 1e-7;  // [m]: children sit 5-40 mm apart
+      std::vector<Vec3d> unused;
+      for (std::size_t s = 0; s < children.size(); ++s) {
+        for (int d = 0; d < 3; ++d) {
+          std::vector<Vec3d> plus = children, minus = children;
+          plus[s][d] += h;
+          minus[s][d] -= h;
+          const double fd = (Adaptivity::splitErrorGradient(ctx, o, plus, unused) -
+                             Adaptivity::splitErrorGradient(ctx, o, minus, unused)) /
+                            (2.0 * h);
+          EXPECT_NEAR(gradient[s][d], fd, 1e-5 * largest) << "parent " << o << ", child " << s << " of " << n;
+        }
+      }
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 400u);
+}
+
+TEST(AdaptivityTest, MovingTheChildrenLowersTheSplitErrorFromTheChosenRotationSmall) {
+  // The same neighbourhoods split without and with split_position_steps = 3: the same plans up to the
+  // rotation (the rotated errors of the moved run are the other run's chosen ones, bit for bit), then the
+  // moves lower E by a quarter or more; each split's children keep the parent's centre, stay within the
+  // template's reach of it and keep 0.85 of a child's diameter apart.
+  double rotatedOnly = 0.0, rotatedBeforeMoves = 0.0, moved = 0.0, unrotated[2] = {0.0, 0.0};
+  std::uint64_t compared[2] = {0, 0};
+  std::size_t groups = 0;
+  double largestOffset = 0.0;
+  for (unsigned seed = 20; seed < 24; ++seed) {
+    for (int moves : {0, 3}) {
+      Neighbourhood nb(seed);
+      nb.params.splitPositionSteps = moves;
+      DfsphSolver solver;
+      SolverContext sctx{nb.p, nb.boundary, nb.fluidNbrs, nb.boundaryNbrs, nb.params};
+      solver.computeDensityAndFactor(sctx);
+      for (std::size_t i = 0; i < nb.p.size(); ++i)
+        nb.p.mOpt[i] = nb.p.m[i] / Real(3);
+      const ParticleSet before = nb.p;
+      Adaptivity adaptivity;
+      const AdaptivityStats st = adaptivity.adapt(nb.context(0.0), true);
+      ASSERT_EQ(st.children, 3 * st.splits);
+      unrotated[moves == 0 ? 0 : 1] += st.splitErrorUnrotated;
+      compared[moves == 0 ? 0 : 1] += st.splitsCompared;
+      if (moves == 0) {
+        rotatedOnly += st.splitErrorChosen;
+        EXPECT_EQ(st.splitErrorRotated, st.splitErrorChosen);
+        continue;
+      }
+      rotatedBeforeMoves += st.splitErrorRotated;
+      moved += st.splitErrorChosen;
+      EXPECT_LE(st.splitErrorChosen, st.splitErrorRotated);
+      const double reach = [] {
+        double d = 0.0;
+        for (const Vec3d& offset : SplitTemplates::get().offsets(3))
+          d = std::max(d, offset.norm());
+        return d;
+      }();
+      for (std::size_t c = nb.p.size() - st.children; c < nb.p.size(); c += 3) {
+        const Vec3d centre =
+            (nb.p.x[c].cast<double>() + nb.p.x[c + 1].cast<double>() + nb.p.x[c + 2].cast<double>()) / 3.0;
+        std::size_t parent = 0;
+        for (std::size_t i = 1; i < before.size(); ++i)
+          if ((before.x[i].cast<double>() - centre).squaredNorm() <
+              (before.x[parent].cast<double>() - centre).squaredNorm())
+            parent = i;
+        const Vec3d xo = before.x[parent].cast<double>();
+        ASSERT_LT((xo - centre).norm(), 1e-6) << "children not centred on their parent";
+        const double parentRadius =
+            nb.params.particleRadius * std::cbrt(double(before.m[parent]) / double(nb.mFine));
+        const double childDiameter = 2.0 * parentRadius / std::cbrt(3.0);
+        for (int a = 0; a < 3; ++a) {
+          const double offset = (nb.p.x[c + a].cast<double>() - xo).norm();
+          EXPECT_LE(offset, reach * parentRadius * (1 + 1e-5));
+          largestOffset = std::max(largestOffset, offset / (reach * parentRadius));
+          for (int b = a + 1; b < 3; ++b)
+            EXPECT_GE((nb.p.x[c + a] - nb.p.x[c + b]).norm(), 0.85 * childDiameter * (1 - 1e-5));
+        }
+        ++groups;
+      }
+    }
+  }
+  ASSERT_GT(compared[0], 500u);
+  EXPECT_EQ(compared[0], compared[1]);
+  EXPECT_EQ(unrotated[0], unrotated[1]);
+  EXPECT_EQ(rotatedBeforeMoves, rotatedOnly);
+  std::printf("split error reduction: %.1f %% by the orientation, %.1f %% with 3 moves (%zu splits)\n",
+              100 * (1 - rotatedOnly / unrotated[0]), 100 * (1 - moved / unrotated[1]), groups);
+  EXPECT_LT(moved, 0.75 * rotatedOnly);
+  EXPECT_GT(groups, 500u);
 }
 
 TEST(AdaptivityTest, SupportsBlendTowardsTheirMassSmall) {

@@ -78,25 +78,38 @@ TEST(HeadlessAdaptiveTest, SplitErrorReductionIsTheOrientationChoice) {
   // before the divergence solve's volume criterion and none after, so the column is 0.19 m a side.
   const fs::path dir = fs::temp_directory_path() / ("fp_headless_column_" + std::to_string(getpid()));
   fs::create_directories(dir);
-  auto writeScene = [&](int candidates, int refinement) {
-    const fs::path path =
-        dir / ("column_" + std::to_string(candidates) + "_" + std::to_string(refinement) + ".json");
+  auto writeScene = [&](int candidates, int refinement, int moves) {
+    const fs::path path = dir / ("column_" + std::to_string(candidates) + "_" + std::to_string(refinement) +
+                                 "_" + std::to_string(moves) + ".json");
     std::ofstream(path)
         << R"({"name": "column", "domain": {"min": [-0.3, -0.1, -0.3], "max": [0.3, 0.4, 0.3]},
       "parameters": {"particle_radius": 0.01, "split_delay": 0, "orientation_candidates": )"
-        << candidates << R"(, "orientation_refinement": )" << refinement << R"(},
+        << candidates << R"(, "orientation_refinement": )" << refinement << R"(, "split_position_steps": )"
+        << moves << R"(},
       "fluid": [{"min": [-0.095, 0.001, -0.095], "max": [0.095, 0.151, 0.095]}],
       "colliders": [{"name": "tank", "shape": "box", "container": true, "half_extents": [0.25, 0.15, 0.25],
                      "position": [0.0, 0.15, 0.0]}]})";
     return path.string();
   };
-  const nlohmann::json chosen = runWithStats("fluidplaying", writeScene(8, 8));
-  const nlohmann::json straight = runWithStats("fluidplaying", writeScene(1, 0));
+  const nlohmann::json chosen = runWithStats("fluidplaying", writeScene(8, 8, 0));
+  const nlohmann::json straight = runWithStats("fluidplaying", writeScene(1, 0, 0));
+  // the defaults: the orientation's 8 + 8, then 3 steps moving the children down the error's gradient
+  const nlohmann::json moved = runWithStats("fluidplaying", writeScene(8, 8, 3));
+  const nlohmann::json movedStraight = runWithStats("fluidplaying", writeScene(1, 0, 3));
   fs::remove_all(dir);
-  ASSERT_TRUE(chosen.is_object());
-  ASSERT_TRUE(straight.is_object());
-  EXPECT_GT(chosen["splits"].get<double>(), 0.0);
-  EXPECT_GT(straight["splits"].get<double>(), 0.0);
+  for (const nlohmann::json* run : {&chosen, &straight, &moved, &movedStraight}) {
+    ASSERT_TRUE(run->is_object());
+    EXPECT_GT((*run)["splits"].get<double>(), 0.0);
+  }
   EXPECT_GT(chosen["split_error_reduction"].get<double>(), 0.1);
+  EXPECT_EQ(chosen["split_error_reduction_orientation"].get<double>(),
+            chosen["split_error_reduction"].get<double>());
   EXPECT_EQ(straight["split_error_reduction"].get<double>(), 0.0);
+  EXPECT_EQ(straight["split_error_reduction_orientation"].get<double>(), 0.0);
+  // the moves add to the orientation's gain; from the unrotated template they are the whole gain
+  EXPECT_GT(moved["split_error_reduction_orientation"].get<double>(), 0.1);
+  EXPECT_GT(moved["split_error_reduction"].get<double>(),
+            moved["split_error_reduction_orientation"].get<double>() + 0.1);
+  EXPECT_EQ(movedStraight["split_error_reduction_orientation"].get<double>(), 0.0);
+  EXPECT_GT(movedStraight["split_error_reduction"].get<double>(), 0.1);
 }
