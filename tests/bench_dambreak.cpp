@@ -598,7 +598,7 @@ MedianRow medianRun(std::vector<SuiteRow> runs) {
 /// Each of `rows` (name, scene, threads) run `runs` times, interleaved: every row once, then again; the
 /// median run of each, in the order given
 std::vector<MedianRow> interleavedRuns(const std::vector<std::tuple<std::string, const char*, int>>& rows,
-                                       int runs, double simTime);
+                                       int runs, double simTime, const std::vector<std::string>& sets);
 
 fp::sim::PhaseTimes perStepMs(const fp::sim::PhaseTimes& t, std::uint64_t steps) {
   const double k = 1e3 / double(std::max<std::uint64_t>(steps, 1));
@@ -616,8 +616,9 @@ fp::sim::PhaseTimes perStepMs(const fp::sim::PhaseTimes& t, std::uint64_t steps)
 }
 
 /// The hand tank in its scene's mode (fluidplaying) with the recorded splash hand, headless through the app
-/// loop as `fluidplaying --headless --hand-script` runs it.
-SuiteRow runHandTank(const std::string& name, const char* scene, int threads, double simTime) {
+/// loop as `fluidplaying --headless --hand-script` runs it, with the command line's --set over the scene's.
+SuiteRow runHandTank(const std::string& name, const char* scene, int threads, double simTime,
+                     const std::vector<std::string>& sets) {
   const fp::engine::ThreadLimit limit(threads);
   fp::engine::CliOptions o;
   o.headless = true;
@@ -626,6 +627,7 @@ SuiteRow runHandTank(const std::string& name, const char* scene, int threads, do
   o.simTime = simTime;
   o.threads = threads;
   o.quiet = true;
+  o.sets = sets;
   std::cerr << "run: " << name << ", " << threads << " thread(s), " << simTime << " s to simulate\n";
   std::ostringstream sink;
   const fp::engine::RunSummary s = fp::engine::runHeadless(o, sink, sink);
@@ -645,12 +647,12 @@ SuiteRow runHandTank(const std::string& name, const char* scene, int threads, do
 }
 
 std::vector<MedianRow> interleavedRuns(const std::vector<std::tuple<std::string, const char*, int>>& rows,
-                                       int runs, double simTime) {
+                                       int runs, double simTime, const std::vector<std::string>& sets) {
   std::vector<std::vector<SuiteRow>> all(rows.size());
   for (int k = 0; k < runs; ++k) {
     for (std::size_t r = 0; r < rows.size(); ++r) {
       const auto& [name, scene, threads] = rows[r];
-      all[r].push_back(runHandTank(name, scene, threads, simTime));
+      all[r].push_back(runHandTank(name, scene, threads, simTime, sets));
     }
   }
   std::vector<MedianRow> out;
@@ -836,7 +838,8 @@ MemoryColumn memoryOf(const std::string& name, const fp::sim::Simulation& simula
   return c;
 }
 
-MemoryColumn memoryOfHandTank(const std::string& name, const char* scene, double simTime) {
+MemoryColumn memoryOfHandTank(const std::string& name, const char* scene, double simTime,
+                              const std::vector<std::string>& sets) {
   const fp::engine::ThreadLimit limit(2);
   fp::engine::CliOptions o;
   o.headless = true;
@@ -845,6 +848,7 @@ MemoryColumn memoryOfHandTank(const std::string& name, const char* scene, double
   o.simTime = simTime;
   o.threads = 2;
   o.quiet = true;
+  o.sets = sets;
   std::cerr << "run: " << name << ", 2 threads, " << simTime << " s to simulate\n";
   std::ostringstream sink;
   MemoryColumn c;
@@ -856,9 +860,11 @@ MemoryColumn memoryOfHandTank(const std::string& name, const char* scene, double
   return c;
 }
 
-MemoryColumn memoryOfDamBreak(double simTime) {
+MemoryColumn memoryOfDamBreak(double simTime, const std::vector<std::string>& sets) {
   const fp::engine::ThreadLimit limit(2);
-  fp::sim::Simulation simulation(fp::engine::loadScene(kDefaultScene));
+  fp::sim::SceneDesc scene = fp::engine::loadScene(kDefaultScene);
+  fp::engine::applySettings(scene.params, sets);
+  fp::sim::Simulation simulation(scene);
   std::cerr << "run: dam_break_hires, 2 threads, " << simTime << " s to simulate\n";
   while (simulation.time() < simTime - 1e-12)
     simulation.step();
@@ -943,9 +949,10 @@ int main(int argc, char** argv) {
     std::vector<MemoryColumn> columns;
     if (const int code = runGuarded([&] {
           std::cout << "fp_bench --memory: issue #12's scenes\n";
-          columns.push_back(memoryOfHandTank("hand_tank_r5mm", kHandScene, options.handTime));
-          columns.push_back(memoryOfHandTank("hand_tank_coarse", kCoarseHandScene, options.handTime));
-          columns.push_back(memoryOfDamBreak(options.simTime.value_or(0.1)));
+          columns.push_back(memoryOfHandTank("hand_tank_r5mm", kHandScene, options.handTime, options.sets));
+          columns.push_back(
+              memoryOfHandTank("hand_tank_coarse", kCoarseHandScene, options.handTime, options.sets));
+          columns.push_back(memoryOfDamBreak(options.simTime.value_or(0.1), options.sets));
         });
         code != kExitOk)
       return code;
@@ -961,7 +968,7 @@ int main(int argc, char** argv) {
           std::vector<std::tuple<std::string, const char*, int>> which;
           for (int threads : options.threads)
             which.emplace_back("hand_tank_r5mm", kHandScene, threads);
-          medians = interleavedRuns(which, options.handRuns, options.handTime);
+          medians = interleavedRuns(which, options.handRuns, options.handTime, options.sets);
           for (const MedianRow& m : medians)
             rows.push_back(m.row);
         });
@@ -983,10 +990,10 @@ int main(int argc, char** argv) {
           medians = interleavedRuns({{"hand_tank_r5mm", kHandScene, 2},
                                      {"hand_tank_r5mm", kHandScene, 1},
                                      {"hand_tank_coarse", kCoarseHandScene, 2}},
-                                    options.handRuns, options.handTime);
+                                    options.handRuns, options.handTime, options.sets);
           for (const MedianRow& m : medians)
             rows.push_back(m.row);
-          const Row dam = runOnce(kDefaultScene, damTime, kRefThreads, {});
+          const Row dam = runOnce(kDefaultScene, damTime, kRefThreads, options.sets);
           SuiteRow r;
           r.name = "dam_break_hires";
           r.threads = dam.threads;
