@@ -5,6 +5,10 @@
 #include <cassert>
 #include <cmath>
 
+#if defined(__SSE2__)
+#include <immintrin.h>
+#endif
+
 #include "sim/kernels.h"
 #include "sim/levels.h"
 #include "sim/parallel.h"
@@ -135,6 +139,19 @@ class SplitErrorTerms {
       f.volume = p.m[j] / rho0;
       f.tau0 = -double(Vo) * CubicSpline::w((p.x[j] - p.x[o]).norm(), H);
     }
+    // the same terms as columns for error()'s kernel loop, padded with neighbours out of reach (W = 0)
+    const std::size_t padded = (m_fluid.size() + kLanes - 1) / kLanes * kLanes;
+    m_columns.assign(6 * padded, Real(0));
+    m_padded = padded;
+    for (std::size_t k = 0; k < padded; ++k) {
+      const bool real = k < m_fluid.size();
+      column(kX)[k] = real ? m_fluid[k].x.x() : Real(0);
+      column(kY)[k] = real ? m_fluid[k].x.y() : Real(0);
+      column(kZ)[k] = real ? m_fluid[k].x.z() : Real(0);
+      column(kInvH)[k] = real ? m_fluid[k].invH : Real(0);
+      column(kFactor)[k] = real ? m_fluid[k].k : Real(0);
+      column(kReach2)[k] = real ? m_fluid[k].reach2 : Real(-1);
+    }
     const double sb = double(ctx.boundary.volumeScale(Hs));
     const std::uint32_t b0 = ctx.boundaryNbrs.offsets[o], b1 = ctx.boundaryNbrs.offsets[o + 1];
     m_walls.resize(b1 - b0);
@@ -153,22 +170,21 @@ class SplitErrorTerms {
     const std::size_t n = m_children;
     assert(children.size() == n);
     const std::size_t nf = m_fluid.size();
-    // W between each fluid neighbour and each child, row by row: the neighbours' sums use them first, the
-    // children's sums then reuse them (|x_j - x_s| is |x_s - x_j| and the pair support is symmetric)
+    const std::size_t padded = m_padded;
+    // W between each child and each fluid neighbour, a row per child over the neighbours (kernelRow). The
+    // neighbours' sums use them first, the children's sums then reuse them (|x_j - x_s| is |x_s - x_j|, the
+    // pair support symmetric).
     thread_local std::vector<Real> wFluid;
     thread_local std::vector<Real> wChildren;
-    wFluid.resize(nf * n);
+    wFluid.resize(n * padded);
+    for (std::size_t s = 0; s < n; ++s)
+      kernelRow(children[s], wFluid.data() + s * padded);
     double e = 0.0;
     // tau_j: the neighbours' density change
     for (std::size_t k = 0; k < nf; ++k) {
-      const Fluid& f = m_fluid[k];
-      Real* row = wFluid.data() + k * n;
-      double tau = f.tau0;
-      for (std::size_t s = 0; s < n; ++s) {
-        const Real d2 = (f.x - children[s]).squaredNorm();
-        row[s] = d2 > f.reach2 ? Real(0) : CubicSpline::wScaled(std::sqrt(d2), f.invH, f.k);
-        tau += double(m_Vs) * row[s];
-      }
+      double tau = m_fluid[k].tau0;
+      for (std::size_t s = 0; s < n; ++s)
+        tau += double(m_Vs) * wFluid[s * padded + k];
       e += tau * tau;
       if (e > bound)
         return e;
@@ -190,7 +206,7 @@ class SplitErrorTerms {
       for (std::size_t t = 0; t < n; ++t)
         rho += double(m_Vs) * wChildren[s * n + t];
       for (std::size_t k = 0; k < nf; ++k)
-        rho += double(m_fluid[k].volume) * wFluid[k * n + s];
+        rho += double(m_fluid[k].volume) * wFluid[s * padded + k];
       for (const Wall& b : m_walls)
         rho += b.volume * CubicSpline::wScaled((xs - b.x).norm(), m_invHsb, m_kHsb);
       // with temporal blending the solver sees the child's density moved (beta) towards the parent's, which
@@ -275,6 +291,47 @@ class SplitErrorTerms {
   }
 
  private:
+  /// W(x_j - c, H_j) for every fluid neighbour j (and 0 for the padding), into row[0, m_padded): each value
+  /// rounded as CubicSpline::wScaled(|x_j - c|) rounds it, with |.| as Eigen's norm() sums the squares, and 0
+  /// beyond the reach. Four neighbours at a time with SSE2 (every x86-64), without branches.
+  void kernelRow(const Vec3& c, Real* row) const {
+    const Real* fx = column(kX);
+    const Real* fy = column(kY);
+    const Real* fz = column(kZ);
+    const Real* fInvH = column(kInvH);
+    const Real* fFactor = column(kFactor);
+    const Real* fReach2 = column(kReach2);
+#if defined(__SSE2__)
+    const __m128 cx = _mm_set1_ps(c.x()), cy = _mm_set1_ps(c.y()), cz = _mm_set1_ps(c.z());
+    const __m128 one = _mm_set1_ps(1.0f), two = _mm_set1_ps(2.0f), six = _mm_set1_ps(6.0f);
+    const __m128 half = _mm_set1_ps(0.5f);
+    for (std::size_t k = 0; k < m_padded; k += 4) {
+      const __m128 dx = _mm_sub_ps(_mm_loadu_ps(fx + k), cx);
+      const __m128 dy = _mm_sub_ps(_mm_loadu_ps(fy + k), cy);
+      const __m128 dz = _mm_sub_ps(_mm_loadu_ps(fz + k), cz);
+      const __m128 d2 = _mm_add_ps(_mm_mul_ps(dx, dx), _mm_add_ps(_mm_mul_ps(dy, dy), _mm_mul_ps(dz, dz)));
+      const __m128 q = _mm_mul_ps(_mm_sqrt_ps(d2), _mm_loadu_ps(fInvH + k));
+      const __m128 t = _mm_sub_ps(one, q);
+      const __m128 factor = _mm_loadu_ps(fFactor + k);
+      // k (6 q q (q - 1) + 1) for q <= 1/2, k 2 t t t (t = 1 - q) for q < 1, else 0
+      const __m128 inner = _mm_mul_ps(
+          factor, _mm_add_ps(_mm_mul_ps(_mm_mul_ps(_mm_mul_ps(six, q), q), _mm_sub_ps(q, one)), one));
+      const __m128 outer = _mm_mul_ps(_mm_mul_ps(_mm_mul_ps(_mm_mul_ps(factor, two), t), t), t);
+      const __m128 isInner = _mm_cmple_ps(q, half);
+      const __m128 isOuter = _mm_cmplt_ps(q, one);
+      const __m128 w =
+          _mm_or_ps(_mm_and_ps(isInner, inner), _mm_andnot_ps(isInner, _mm_and_ps(isOuter, outer)));
+      _mm_storeu_ps(row + k, _mm_andnot_ps(_mm_cmpgt_ps(d2, _mm_loadu_ps(fReach2 + k)), w));
+    }
+#else
+    for (std::size_t k = 0; k < m_padded; ++k) {
+      const Real dx = fx[k] - c.x(), dy = fy[k] - c.y(), dz = fz[k] - c.z();
+      const Real d2 = dx * dx + (dy * dy + dz * dz);
+      row[k] = d2 > fReach2[k] ? Real(0) : CubicSpline::wScaled(std::sqrt(d2), fInvH[k], fFactor[k]);
+    }
+#endif
+  }
+
   /// the cubic spline W(r) and (dW/dr) / r in double precision, from 1 / H
   static void kernelAndGradient(double r, double invH, double& w, double& g) {
     const double q = r * invH;
@@ -299,6 +356,17 @@ class SplitErrorTerms {
     Real invH, k, reach2, volume;
     double tau0;
   };
+  // error()'s columns of the fluid terms, each m_padded long
+  enum Column { kX, kY, kZ, kInvH, kFactor, kReach2 };
+  static constexpr std::size_t kLanes = 8;
+  Real* column(Column c) {
+    return m_columns.data() + std::size_t(c) * m_padded;
+  }
+  const Real* column(Column c) const {
+    return m_columns.data() + std::size_t(c) * m_padded;
+  }
+  std::vector<Real> m_columns;
+  std::size_t m_padded = 0;
   struct Wall {
     Vec3 x;
     double volume;
