@@ -127,30 +127,26 @@ class SplitErrorTerms {
     m_kHsb = CubicSpline::factor(m_invHsb);
     const std::uint32_t f0 = ctx.fluidNbrs.offsets[o], f1 = ctx.fluidNbrs.offsets[o + 1];
     m_fluid.resize(f1 - f0);
+    // the kernel terms as columns for error()'s kernel loop, padded with neighbours out of reach (W = 0)
+    m_padded = (m_fluid.size() + kLanes - 1) / kLanes * kLanes;
+    m_columns.assign(6 * m_padded, Real(0));
+    std::fill_n(column(kReach2), m_padded, Real(-1));
     for (std::uint32_t k = f0; k < f1; ++k) {
       const std::uint32_t j = ctx.fluidNbrs.indices[k];
-      Fluid& f = m_fluid[k - f0];
+      const std::size_t c = k - f0;
+      Fluid& f = m_fluid[c];
       f.x = p.x[j];
       const Real H = pairSupport(p.H[j], Ho);
       f.invH = Real(1) / H;
-      f.k = CubicSpline::factor(f.invH);
-      // beyond (1 + 5e-5) H the kernel is zero for certain (q >= 1 however r and 1 / H round)
-      f.reach2 = H * H * Real(1.0001);
       f.volume = p.m[j] / rho0;
       f.tau0 = -double(Vo) * CubicSpline::w((p.x[j] - p.x[o]).norm(), H);
-    }
-    // the same terms as columns for error()'s kernel loop, padded with neighbours out of reach (W = 0)
-    const std::size_t padded = (m_fluid.size() + kLanes - 1) / kLanes * kLanes;
-    m_columns.assign(6 * padded, Real(0));
-    m_padded = padded;
-    for (std::size_t k = 0; k < padded; ++k) {
-      const bool real = k < m_fluid.size();
-      column(kX)[k] = real ? m_fluid[k].x.x() : Real(0);
-      column(kY)[k] = real ? m_fluid[k].x.y() : Real(0);
-      column(kZ)[k] = real ? m_fluid[k].x.z() : Real(0);
-      column(kInvH)[k] = real ? m_fluid[k].invH : Real(0);
-      column(kFactor)[k] = real ? m_fluid[k].k : Real(0);
-      column(kReach2)[k] = real ? m_fluid[k].reach2 : Real(-1);
+      column(kX)[c] = f.x.x();
+      column(kY)[c] = f.x.y();
+      column(kZ)[c] = f.x.z();
+      column(kInvH)[c] = f.invH;
+      column(kFactor)[c] = CubicSpline::factor(f.invH);
+      // beyond (1 + 5e-5) H the kernel is zero for certain (q >= 1 however r and 1 / H round)
+      column(kReach2)[c] = H * H * Real(1.0001);
     }
     const double sb = double(ctx.boundary.volumeScale(Hs));
     const std::uint32_t b0 = ctx.boundaryNbrs.offsets[o], b1 = ctx.boundaryNbrs.offsets[o + 1];
@@ -351,9 +347,9 @@ class SplitErrorTerms {
     }
   }
 
-  struct Fluid {
+  struct Fluid {  // what the sums and the gradient read
     Vec3 x;
-    Real invH, k, reach2, volume;
+    Real invH, volume;
     double tau0;
   };
   // error()'s columns of the fluid terms, each m_padded long
