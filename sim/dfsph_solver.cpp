@@ -328,12 +328,14 @@ SolveResult DfsphSolver::densitySolve(SolverContext& ctx, Real dt) {
   }
   SolveResult result;
   for (;;) {
+    const std::uint8_t* held = ctx.held;
     const double sum = densityRatePass(ctx, [&](std::size_t i, Real rate) {
-      const Real error = predicted(i, rate) - Real(1);
+      // (a held particle's density is the one it was held with: not this solve's to correct)
+      const Real error = held && held[i] ? Real(0) : predicted(i, rate) - Real(1);
       m_k[i] = error * factor[i] * invDt2;
       return error;
     });
-    result.error = sum / double(n);
+    result.error = sum / double(std::max<std::size_t>(1, n - std::min(n, ctx.heldCount)));
     if ((result.iterations >= ctx.params.minIterations && result.error <= tolerance) ||
         result.iterations >= ctx.params.maxIterations) {
       break;

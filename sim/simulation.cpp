@@ -774,6 +774,13 @@ void Simulation::step() {
   m_heldLastStep = st.heldParticles > 0;
 
   SolverContext ctx{m_fluid, m_boundary, m_fluidNbrs, m_boundaryNbrs, m_params};
+  if (!m_held.empty()) {
+    m_heldMask.assign(n, 0);
+    for (std::uint32_t i : m_held)
+      m_heldMask[i] = 1;
+    ctx.held = m_heldMask.data();
+    ctx.heldCount = m_held.size();
+  }
   m_solver.resetBoundaryImpulse();
   double blendTime = 0.0;
   if (adaptive()) {
