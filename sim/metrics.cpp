@@ -1,6 +1,8 @@
 #include "sim/metrics.h"
 
 #include <algorithm>
+#include <cmath>
+#include <limits>
 #include <utility>
 #include <vector>
 
@@ -67,6 +69,30 @@ DensityErrorMeans densityErrorMeans(const ParticleSet& p, double restDensity) {
     out.perParticle = sum / double(p.size());
   if (volume > 0.0)
     out.volumeWeighted = weighted / volume;
+  return out;
+}
+
+TimeStepHeadroom timeStepHeadroom(const ParticleSet& p, double dt, double cflFactor, double dtMax) {
+  TimeStepHeadroom out;
+  if (p.size() == 0 || !(dt > 0.0))
+    return out;
+  // the level whose step 2^L dt is the longest within `limit`
+  auto work = [&](double limit) {
+    int level = 0;
+    while (level < kMaxTimeLevel && std::ldexp(dt, level + 1) <= limit)
+      ++level;
+    return std::ldexp(1.0, -level);
+  };
+  double capped = 0.0, uncapped = 0.0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const double speed = double((p.v[i] + Real(dt) * p.a[i]).norm());
+    const double own =
+        speed > 0.0 ? cflFactor * 0.5 * double(p.H[i]) / speed : std::numeric_limits<double>::infinity();
+    capped += work(std::min(own, dtMax));
+    uncapped += work(own);
+  }
+  out.capped = capped / double(p.size());
+  out.uncapped = uncapped / double(p.size());
   return out;
 }
 

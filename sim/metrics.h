@@ -22,4 +22,18 @@ struct DensityErrorMeans {
 /// The mean compression max(0, rho / rho0 - 1), per particle and volume-weighted; zeros for no particles.
 DensityErrorMeans densityErrorMeans(const ParticleSet& p, double restDensity);
 
+/// What time steps per particle could save at most in one step (docs/method.md, Time levels). Each particle's
+/// own CFL step is `cfl_factor (H_i / 2) / |v_i + dt a_i|`; in an ideal power-of-two multi-rate scheme it
+/// steps 2^L_i dt, the longest such step within its own (L_i <= kMaxTimeLevel), and costs 2^-L_i of a
+/// particle-step per step of `dt`. The shares are of one step for every particle (1: nothing to gain).
+struct TimeStepHeadroom {
+  double capped = 1.0;    ///< with every step within dt_max as well
+  double uncapped = 1.0;  ///< with the particles' own CFL steps alone
+};
+/// The deepest level counted: steps 64 times the global one.
+constexpr int kMaxTimeLevel = 6;
+/// The headroom of state `p` after a step of `dt` (its velocities and accelerations); 1 for no particles. The
+/// sums are of powers of two, so exact in any order.
+TimeStepHeadroom timeStepHeadroom(const ParticleSet& p, double dt, double cflFactor, double dtMax);
+
 }  // namespace fp::sim

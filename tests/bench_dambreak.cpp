@@ -33,6 +33,7 @@
 #include "engine/cli_app.h"
 #include "engine/headless_runner.h"
 #include "engine/scene_loader.h"
+#include "sim/metrics.h"
 #include "sim/simulation.h"
 
 namespace {
@@ -234,6 +235,9 @@ struct Row {
   double bytesPerParticle = 0;
   double peakRssMB = 0;
   double densityErrorMeanPct = 0;
+  /// what time steps per particle could save at most (sim::timeStepHeadroom, docs/method.md, Time levels):
+  /// the particle-steps an ideal power-of-two scheme takes, % of one step for all, within dt_max and without
+  double headroomPct = 100, headroomNoCapPct = 100;
 };
 
 /// A column of the table and the CSV: name, digits after the point, and how to read it from a row.
@@ -268,6 +272,8 @@ const std::vector<Metric>& metrics() {
       {"bytes_per_particle", 1, [](const Row& r) { return r.bytesPerParticle; }},
       {"peak_rss_MB", 2, [](const Row& r) { return r.peakRssMB; }},
       {"density_error_mean_pct", 4, [](const Row& r) { return r.densityErrorMeanPct; }},
+      {"time_step_headroom_pct", 1, [](const Row& r) { return r.headroomPct; }},
+      {"time_step_headroom_nocap_pct", 1, [](const Row& r) { return r.headroomNoCapPct; }},
   };
   return list;
 }
@@ -402,9 +408,22 @@ Row runOnce(const std::string& scenePath, double simTime, int threads, const std
     log.emplace(simulation, scene, speedLog);
   const auto start = Clock::now();
   auto lastReport = start;
+  double headroom = 0.0, headroomNoCap = 0.0, headroomParticles = 0.0;
+  double measuring = 0.0;  // wall time of the headroom's measurement, not the simulation's
   // The small tolerance stops a CFL step that lands a hair short of simTime from adding a whole extra step.
   while (simulation.time() < simTime - 1e-12) {
     simulation.step();
+    {
+      const auto t0 = Clock::now();
+      const fp::sim::TimeStepHeadroom h =
+          fp::sim::timeStepHeadroom(simulation.particles(), simulation.lastStep().dt,
+                                    simulation.params().cflFactor, simulation.params().dtMax);
+      const double count = double(simulation.particles().size());
+      headroom += count * h.capped;
+      headroomNoCap += count * h.uncapped;
+      headroomParticles += count;
+      measuring += std::chrono::duration<double>(Clock::now() - t0).count();
+    }
     if (log)
       log->step(simulation);
     const auto now = Clock::now();
@@ -418,7 +437,7 @@ Row runOnce(const std::string& scenePath, double simTime, int threads, const std
       std::cerr << line << std::flush;
     }
   }
-  const double wall = std::chrono::duration<double>(Clock::now() - start).count();
+  const double wall = std::chrono::duration<double>(Clock::now() - start).count() - measuring;
 
   const fp::sim::RunStats& run = simulation.runStats();
   Row r;
@@ -449,6 +468,10 @@ Row runOnce(const std::string& scenePath, double simTime, int threads, const std
   r.bytesPerParticle = r.particles ? double(bytes) / double(r.particles) : 0.0;
   r.peakRssMB = peakRssBytes() / kBytesPerMB;
   r.densityErrorMeanPct = 100.0 * run.densityErrorSum / steps;
+  if (headroomParticles > 0) {
+    r.headroomPct = 100.0 * headroom / headroomParticles;
+    r.headroomNoCapPct = 100.0 * headroomNoCap / headroomParticles;
+  }
   return r;
 }
 

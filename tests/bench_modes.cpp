@@ -80,7 +80,10 @@ struct Row {
   double levelsShare = 0;  // levels alone, share of step time
   double level1Share = 0;  // time_levels = 2: particle-steps on time level 1, share of all particle-steps
   double heldShare = 0;    // particle-steps that held their acceleration (skipped the solves), share
-  sim::PhaseTimes times;   // wall time by phase, summed over the steps (of the first run)
+  // what time steps per particle could save at most (sim::timeStepHeadroom), particle-weighted over the steps
+  // of the first run: the particle-steps an ideal power-of-two scheme takes, within dt_max and without it
+  double headroomCapped = 1, headroomUncapped = 1;
+  sim::PhaseTimes times;  // wall time by phase, summed over the steps (of the first run)
   double surfaceFine = 0, band = 0, dynamic = 0, base = 0, tooLight = 0;  // mean particles per frame
   double densityErrorParticles = 0, densityErrorVolume = 0;  // frame means, per particle and volume-weighted
   std::vector<double> runHeightMean, runHeightMax;           // heightMean and heightMax of every run [m]
@@ -309,6 +312,7 @@ Row runMode(sim::SceneDesc scene, sim::AdaptivityMode mode, double simTime, cons
   const double frameDt = 1.0 / scene.frameRate;
   double wall = 0.0;
   SplitJumpTracker jumps;
+  double headroomCapped = 0.0, headroomUncapped = 0.0, headroomParticles = 0.0;
   sample();
   try {
     while (simulation.time() < simTime - 1e-12) {
@@ -317,6 +321,13 @@ Row runMode(sim::SceneDesc scene, sim::AdaptivityMode mode, double simTime, cons
       wall += std::chrono::duration<double>(Clock::now() - start).count();
       if (simulation.adaptive())
         jumps.afterStep(simulation);
+      const sim::TimeStepHeadroom h =
+          sim::timeStepHeadroom(simulation.particles(), simulation.lastStep().dt,
+                                simulation.params().cflFactor, simulation.params().dtMax);
+      const double count = double(simulation.particles().size());
+      headroomCapped += count * h.capped;
+      headroomUncapped += count * h.uncapped;
+      headroomParticles += count;
       if (simulation.time() >= frame * frameDt - 1e-12)
         sample();
     }
@@ -326,6 +337,10 @@ Row runMode(sim::SceneDesc scene, sim::AdaptivityMode mode, double simTime, cons
   if (render && !imageDone)
     render->renderFrame(0, simulation);
   row.wall = wall;
+  if (headroomParticles > 0) {
+    row.headroomCapped = headroomCapped / headroomParticles;
+    row.headroomUncapped = headroomUncapped / headroomParticles;
+  }
   for (const Sample& s : row.series) {
     row.heightMean += s.height / double(row.series.size());
     row.heightSplashMean += s.heightSplash / double(row.series.size());
@@ -581,7 +596,8 @@ int main(int argc, char** argv) {
          "share,"
          "density_error_frames_per_particle,density_error_frames_volume_weighted,runs,splash_height_mean_"
          "runs_m,"
-         "splash_height_mean_spread_m,splash_height_max_runs_m,splash_height_max_spread_m\n";
+         "splash_height_mean_spread_m,splash_height_max_runs_m,splash_height_max_spread_m,"
+         "time_step_headroom_capped,time_step_headroom_uncapped\n";
   bool allOk = true;
   for (const Row& r : rows) {
     const double speedup = high && high->wall > 0 && r.wall > 0 ? high->wall / r.wall : 0.0;
@@ -608,18 +624,20 @@ int main(int argc, char** argv) {
         << scene.params.particleRadius << "," << threads << ",\"" << machine << "\"," << r.levelsShare << ","
         << r.densityErrorParticles << "," << r.densityErrorVolume << "," << r.runHeightMean.size() << ","
         << meanAndSpread(r.runHeightMean).first << "," << meanAndSpread(r.runHeightMean).second << ","
-        << meanAndSpread(r.runHeightMax).first << "," << meanAndSpread(r.runHeightMax).second << "\n";
+        << meanAndSpread(r.runHeightMax).first << "," << meanAndSpread(r.runHeightMax).second << ","
+        << r.headroomCapped << "," << r.headroomUncapped << "\n";
   }
   std::printf(
       "\nparticles by what they are refined for, mean per frame as a share of uniform-high's count:\n");
-  std::printf("%-13s %9s %9s %9s %9s %9s %8s %10s %10s %7s %7s\n", "mode", "surface", "band", "dynamic",
-              "base", "too light", "levels%", "err% part", "err% vol", "lvl1%", "held%");
+  std::printf("%-13s %9s %9s %9s %9s %9s %8s %10s %10s %7s %7s %7s %7s\n", "mode", "surface", "band",
+              "dynamic", "base", "too light", "levels%", "err% part", "err% vol", "lvl1%", "held%", "ideal%",
+              "nocap%");
   for (const Row& r : rows) {
     const double u = high && high->particlesMean > 0 ? 100.0 / high->particlesMean : 0.0;
-    std::printf("%-13s %8.2f%% %8.2f%% %8.2f%% %8.2f%% %8.2f%% %8.1f %10.3f %10.3f %7.1f %7.1f\n",
+    std::printf("%-13s %8.2f%% %8.2f%% %8.2f%% %8.2f%% %8.2f%% %8.1f %10.3f %10.3f %7.1f %7.1f %7.1f %7.1f\n",
                 r.mode.c_str(), u * r.surfaceFine, u * r.band, u * r.dynamic, u * r.base, u * r.tooLight,
                 100 * r.levelsShare, 100 * r.densityErrorParticles, 100 * r.densityErrorVolume,
-                100 * r.level1Share, 100 * r.heldShare);
+                100 * r.level1Share, 100 * r.heldShare, 100 * r.headroomCapped, 100 * r.headroomUncapped);
   }
   std::printf("\nwall time by phase, ms per step (first run of each mode):\n");
   std::printf("%-13s %9s %9s %9s %9s %9s %9s %9s %9s %9s %9s\n", "mode", "neighb.", "density", "diverg.",

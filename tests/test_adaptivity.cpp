@@ -1244,6 +1244,26 @@ TEST(MetricsTest, HeightPercentileIsWeightedByMassSmall) {
   EXPECT_EQ(heightPercentile(ParticleSet(), 0.999), 0.0);
 }
 
+TEST(MetricsTest, TimeStepHeadroomCountsEachParticlesPowerOfTwoLevel) {
+  // cfl_factor 0.4, H = 0.04 m: a particle's own step is 0.4 * 0.02 / speed = 0.008 / speed
+  const double dt = 1e-3, cfl = 0.4, dtMax = 5e-3;
+  ParticleSet p;
+  p.add(Vec3(0, 0, 0), Vec3::Zero(), 1.0f, 0.04f, 1000.0f);  // at rest: own step unbounded
+  p.add(Vec3(1, 0, 0), Vec3(0, Real(0.008 / 1.5e-3), 0), 1.0f, 0.04f, 1000.0f);  // own 1.5 dt: level 0
+  p.add(Vec3(2, 0, 0), Vec3(Real(0.008 / 4.5e-3), 0, 0), 1.0f, 0.04f, 1000.0f);  // own 4.5 dt: level 2
+  const TimeStepHeadroom h = timeStepHeadroom(p, dt, cfl, dtMax);
+  // capped: the resting one at level 2 (4 ms <= 5 ms < 8 ms), then 1 and 1/4
+  EXPECT_DOUBLE_EQ(h.capped, (0.25 + 1.0 + 0.25) / 3.0);
+  // uncapped: the resting one at the deepest level
+  EXPECT_DOUBLE_EQ(h.uncapped, (std::ldexp(1.0, -kMaxTimeLevel) + 1.0 + 0.25) / 3.0);
+  // the acceleration counts as the CFL counts it: |v + dt a|; this one's own step falls to 1.5 dt
+  p.a[0] = Vec3(Real(0.008 / 1.5e-3 / dt), 0, 0);
+  EXPECT_DOUBLE_EQ(timeStepHeadroom(p, dt, cfl, dtMax).capped, (1.0 + 1.0 + 0.25) / 3.0);
+  // a step at dt_max leaves nothing to gain
+  EXPECT_DOUBLE_EQ(timeStepHeadroom(p, dtMax, cfl, dtMax).capped, 1.0);
+  EXPECT_DOUBLE_EQ(timeStepHeadroom(ParticleSet(), dt, cfl, dtMax).uncapped, 1.0);
+}
+
 TEST(MetricsTest, HeightPercentileSelectsWhatAFullSortGivesSmall) {
   // weighted selection against the sorted cumulative sum, with ties in height and whole-number masses (exact
   // sums, so both reach the target at the same particle), over sizes below and above the selection's cut-off
