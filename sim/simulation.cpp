@@ -50,21 +50,41 @@ constexpr std::uint32_t kFlagTimeLevel1 = 1u << 16;
 
 /// Drops the neighbours of the particles marked in `held` from `list`, in place: they take no part in this
 /// step's solves.
-void dropNeighbors(NeighborList& list, const std::vector<std::uint8_t>& held) {
+void dropNeighbors(NeighborList& list, const std::vector<std::uint8_t>& held, NeighborList& scratch) {
+  // blocks of rows count what they keep, then copy it from their offsets into `scratch`, which is swapped in
+  // (the result does not depend on the thread count; the old arrays are the next call's scratch)
+  using Range = tbb::blocked_range<std::size_t>;
+  constexpr std::size_t kBlock = 2048;
   const std::size_t n = list.offsets.size() - 1;
-  std::uint32_t write = 0;
-  std::uint32_t begin = list.offsets[0];
-  for (std::size_t i = 0; i < n; ++i) {
-    const std::uint32_t end = list.offsets[i + 1];
-    list.offsets[i] = write;
-    if (!held[i]) {
-      for (std::uint32_t k = begin; k < end; ++k)
-        list.indices[write++] = list.indices[k];
+  const std::size_t blocks = (n + kBlock - 1) / kBlock;
+  std::vector<std::uint32_t> first(blocks + 1, 0);
+  parallelFor(Range(0, blocks, 1), [&](const Range& r) {
+    for (std::size_t b = r.begin(); b < r.end(); ++b) {
+      std::uint32_t count = 0;
+      for (std::size_t i = b * kBlock; i < std::min(n, (b + 1) * kBlock); ++i)
+        count += held[i] ? 0 : list.offsets[i + 1] - list.offsets[i];
+      first[b + 1] = count;
     }
-    begin = end;
-  }
-  list.offsets[n] = write;
-  list.indices.resize(write);
+  });
+  for (std::size_t b = 0; b < blocks; ++b)
+    first[b + 1] += first[b];
+  scratch.offsets.resize(n + 1);
+  scratch.indices.resize(first[blocks]);
+  parallelFor(Range(0, blocks, 1), [&](const Range& r) {
+    for (std::size_t b = r.begin(); b < r.end(); ++b) {
+      std::uint32_t write = first[b];
+      for (std::size_t i = b * kBlock; i < std::min(n, (b + 1) * kBlock); ++i) {
+        scratch.offsets[i] = write;
+        if (!held[i]) {
+          for (std::uint32_t k = list.offsets[i]; k < list.offsets[i + 1]; ++k)
+            scratch.indices[write++] = list.indices[k];
+        }
+      }
+    }
+  });
+  scratch.offsets[n] = first[blocks];
+  std::swap(list.offsets, scratch.offsets);
+  std::swap(list.indices, scratch.indices);
 }
 
 /// Releases an object's spare capacity: a copy's vectors hold what they contain, no more.
@@ -633,42 +653,54 @@ std::size_t Simulation::holdCoarse() {
   // neighbour lists are emptied, so each solver pass costs them nothing); they keep their density and warm
   // starts and drift with their velocity. Their neighbours still see them, as particles of known velocity
   // whose stiffness is zero, and push them with the reaction of their own pressure (reactOnHeld).
+  using Range = tbb::blocked_range<std::size_t>;
   const std::size_t n = m_fluid.size();
-  m_held.clear();
-  std::vector<std::uint8_t> mark(n, 0);
-  for (std::size_t i = 0; i < n; ++i) {
-    if (m_fluid.flags[i] & kFlagTimeLevel1) {
-      m_held.push_back(std::uint32_t(i));
-      mark[i] = 1;
-    }
-  }
+  parallelSelect(n, 4096, m_held, [&](std::size_t i) { return (m_fluid.flags[i] & kFlagTimeLevel1) != 0; });
   if (m_held.empty())
     return 0;
-  // the held particles' fluid neighbours, for the reaction of their active neighbours' pressure
-  m_heldNbrs.offsets.assign(1, 0);
-  m_heldNbrs.indices.clear();
-  for (std::uint32_t i : m_held) {
-    for (std::uint32_t k = m_fluidNbrs.offsets[i]; k < m_fluidNbrs.offsets[i + 1]; ++k) {
-      if (!mark[m_fluidNbrs.indices[k]])
-        m_heldNbrs.indices.push_back(m_fluidNbrs.indices[k]);
-    }
-    m_heldNbrs.offsets.push_back(std::uint32_t(m_heldNbrs.indices.size()));
-  }
-  dropNeighbors(m_fluidNbrs, mark);
-  dropNeighbors(m_boundaryNbrs, mark);
   const std::size_t h = m_held.size();
+  m_heldMask.assign(n, 0);
+  parallelFor(Range(0, h, 4096), [&](const Range& r) {
+    for (std::size_t k = r.begin(); k < r.end(); ++k)
+      m_heldMask[m_held[k]] = 1;
+  });
+  const std::vector<std::uint8_t>& mark = m_heldMask;
+  // the held particles' active fluid neighbours, for the reaction of their pressure: counted, then written
+  // from their offsets
+  m_heldNbrs.offsets.assign(h + 1, 0);
+  parallelFor(Range(0, h, 1024), [&](const Range& r) {
+    for (std::size_t k = r.begin(); k < r.end(); ++k) {
+      const std::uint32_t i = m_held[k];
+      std::uint32_t count = 0;
+      for (std::uint32_t q = m_fluidNbrs.offsets[i]; q < m_fluidNbrs.offsets[i + 1]; ++q)
+        count += mark[m_fluidNbrs.indices[q]] ? 0 : 1;
+      m_heldNbrs.offsets[k + 1] = count;
+    }
+  });
+  for (std::size_t k = 0; k < h; ++k)
+    m_heldNbrs.offsets[k + 1] += m_heldNbrs.offsets[k];
+  m_heldNbrs.indices.resize(m_heldNbrs.offsets[h]);
   m_heldRho.resize(h);
   m_heldKappa.resize(h);
   m_heldKappaV.resize(h);
-  for (std::size_t k = 0; k < h; ++k) {
-    const std::uint32_t i = m_held[k];
-    m_heldRho[k] = m_fluid.rho[i];
-    m_heldKappa[k] = m_fluid.kappa[i];
-    m_heldKappaV[k] = m_fluid.kappaV[i];
-    // no warm start: a held particle's stiffness stays zero in this step's solves
-    m_fluid.kappa[i] = 0;
-    m_fluid.kappaV[i] = 0;
-  }
+  parallelFor(Range(0, h, 1024), [&](const Range& r) {
+    for (std::size_t k = r.begin(); k < r.end(); ++k) {
+      const std::uint32_t i = m_held[k];
+      std::uint32_t write = m_heldNbrs.offsets[k];
+      for (std::uint32_t q = m_fluidNbrs.offsets[i]; q < m_fluidNbrs.offsets[i + 1]; ++q) {
+        if (!mark[m_fluidNbrs.indices[q]])
+          m_heldNbrs.indices[write++] = m_fluidNbrs.indices[q];
+      }
+      m_heldRho[k] = m_fluid.rho[i];
+      m_heldKappa[k] = m_fluid.kappa[i];
+      m_heldKappaV[k] = m_fluid.kappaV[i];
+      // no warm start: a held particle's stiffness stays zero in this step's solves
+      m_fluid.kappa[i] = 0;
+      m_fluid.kappaV[i] = 0;
+    }
+  });
+  dropNeighbors(m_fluidNbrs, mark, m_dropScratch);
+  dropNeighbors(m_boundaryNbrs, mark, m_dropScratch);
   return h;
 }
 
@@ -696,8 +728,11 @@ void Simulation::reactOnHeld(Real dt) {
 }
 
 void Simulation::restoreHeld(std::vector<Real>& field, const std::vector<Real>& saved) const {
-  for (std::size_t k = 0; k < m_held.size(); ++k)
-    field[m_held[k]] = saved[k];
+  parallelFor(tbb::blocked_range<std::size_t>(0, m_held.size(), 4096),
+              [&](const tbb::blocked_range<std::size_t>& r) {
+                for (std::size_t k = r.begin(); k < r.end(); ++k)
+                  field[m_held[k]] = saved[k];
+              });
 }
 
 std::size_t Simulation::assignTimeLevels(Real dt) {
@@ -707,32 +742,43 @@ std::size_t Simulation::assignTimeLevels(Real dt) {
   // still blends. Level 1 takes the candidates whose neighbours are all candidates: one layer of particles
   // that could hold but take part lies between the held ones and the particles that need the short step
   // (the buffer of regional time stepping, Goswami & Batty 2014).
+  using Range = tbb::blocked_range<std::size_t>;
   const std::size_t n = m_fluid.size();
   const std::size_t nStatic = m_boundary.staticCount();
   const Real cfl = Real(m_params.cflFactor);
-  std::vector<std::uint8_t> candidate(n, 0);
-  for (std::size_t i = 0; i < n; ++i) {
-    bool ok = m_fluid.parentIdOf(i) == kNoParent;
-    const Real speed = m_fluid.v[i].norm() + dt * m_fluid.a[i].norm();
-    if (ok && speed > Real(0))
-      ok = cfl * Real(0.5) * m_fluid.H[i] / speed >= Real(2) * dt;
-    for (std::uint32_t k = m_boundaryNbrs.offsets[i]; ok && k < m_boundaryNbrs.offsets[i + 1]; ++k)
-      ok = m_boundaryNbrs.indices[k] < nStatic;
-    candidate[i] = ok ? 1 : 0;
-  }
-  std::size_t count = 0;
-  for (std::size_t i = 0; i < n; ++i) {
-    bool level1 = candidate[i] != 0;
-    for (std::uint32_t k = m_fluidNbrs.offsets[i]; level1 && k < m_fluidNbrs.offsets[i + 1]; ++k)
-      level1 = candidate[m_fluidNbrs.indices[k]] != 0;
-    if (level1) {
-      m_fluid.flags[i] |= kFlagTimeLevel1;
-      ++count;
-    } else {
-      m_fluid.flags[i] &= ~kFlagTimeLevel1;
+  // a held particle's two steps of drift and one of solve must stay a step the solver is trusted with
+  const bool withinMax = 2.0 * double(dt) <= m_params.dtMax;
+  m_timeLevelCandidate.resize(n);
+  std::uint8_t* candidate = m_timeLevelCandidate.data();
+  parallelFor(Range(0, n, 2048), [&](const Range& r) {
+    for (std::size_t i = r.begin(); i < r.end(); ++i) {
+      bool ok = withinMax && m_fluid.parentIdOf(i) == kNoParent;
+      const Real speed = m_fluid.v[i].norm() + dt * m_fluid.a[i].norm();
+      if (ok && speed > Real(0))
+        ok = cfl * Real(0.5) * m_fluid.H[i] / speed >= Real(2) * dt;
+      for (std::uint32_t k = m_boundaryNbrs.offsets[i]; ok && k < m_boundaryNbrs.offsets[i + 1]; ++k)
+        ok = m_boundaryNbrs.indices[k] < nStatic;
+      candidate[i] = ok ? 1 : 0;
     }
-  }
-  return count;
+  });
+  // (a count: exact in any order)
+  return parallelReduce(
+      Range(0, n, 2048), std::size_t(0),
+      [&](const Range& r, std::size_t count) {
+        for (std::size_t i = r.begin(); i < r.end(); ++i) {
+          bool level1 = candidate[i] != 0;
+          for (std::uint32_t k = m_fluidNbrs.offsets[i]; level1 && k < m_fluidNbrs.offsets[i + 1]; ++k)
+            level1 = candidate[m_fluidNbrs.indices[k]] != 0;
+          if (level1) {
+            m_fluid.flags[i] |= kFlagTimeLevel1;
+            ++count;
+          } else {
+            m_fluid.flags[i] &= ~kFlagTimeLevel1;
+          }
+        }
+        return count;
+      },
+      [](std::size_t a, std::size_t b) { return a + b; });
 }
 
 void Simulation::step() {
@@ -766,19 +812,18 @@ void Simulation::step() {
     // the particles held in the last step drifted through it: they get its gravity impulse now, so every
     // particle receives gravity for every step
     const Vec3 g(Real(m_params.gravity[0]), Real(m_params.gravity[1]), Real(m_params.gravity[2]));
-    for (std::size_t i = 0; i < n; ++i) {
-      if (m_fluid.flags[i] & kFlagTimeLevel1)
-        m_fluid.v[i] += m_dt * g;
-    }
+    parallelFor(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t i = r.begin(); i < r.end(); ++i) {
+        if (m_fluid.flags[i] & kFlagTimeLevel1)
+          m_fluid.v[i] += m_dt * g;
+      }
+    });
   }
   m_heldLastStep = st.heldParticles > 0;
 
   SolverContext ctx{m_fluid, m_boundary, m_fluidNbrs, m_boundaryNbrs, m_params};
   if (!m_held.empty()) {
-    m_heldMask.assign(n, 0);
-    for (std::uint32_t i : m_held)
-      m_heldMask[i] = 1;
-    ctx.held = m_heldMask.data();
+    ctx.held = m_heldMask.data();  // (holdCoarse)
     ctx.heldCount = m_held.size();
   }
   m_solver.resetBoundaryImpulse();
@@ -935,6 +980,10 @@ std::vector<MemoryItem> Simulation::memoryBreakdown() const {
   countVector(held, m_heldNbrs.offsets);
   countVector(held, m_heldNbrs.indices);
   countVector(held, m_heldNbrs.chunkCounts);
+  countVector(held, m_heldMask);
+  countVector(held, m_dropScratch.offsets);
+  countVector(held, m_dropScratch.indices);
+  countVector(held, m_timeLevelCandidate);
   out.push_back(held);
   MemoryItem cells{"grid: cell ranges (fluid, static, kinematic), sort order, walls' clearance", 0, 0};
   for (const auto* v : {&m_order, &m_fluidCells, &m_staticCells, &m_kinematicCells})

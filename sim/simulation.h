@@ -204,7 +204,9 @@ class Simulation {
   std::vector<Real> m_target;
   // time levels (time_levels = 2): particles held this step, and their saved fields
   std::vector<std::uint32_t> m_held;
-  std::vector<std::uint8_t> m_heldMask;  // 1 for the particles in m_held (held steps)
+  std::vector<std::uint8_t> m_heldMask;            // 1 for the particles in m_held (held steps)
+  NeighborList m_dropScratch;                      // dropNeighbors' other arrays (held steps)
+  std::vector<std::uint8_t> m_timeLevelCandidate;  // assignTimeLevels' candidates
   std::vector<Real> m_heldRho, m_heldKappa, m_heldKappaV;
   std::size_t m_level1 = 0;
   bool m_heldLastStep = false;
