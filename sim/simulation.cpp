@@ -837,8 +837,10 @@ void Simulation::step() {
     t2 = tb;
   }
   // (levels and adaptation need every particle's neighbours: only on synchronised steps)
-  const bool adaptNow =
-      adaptive() && syncStep && m_stepCount % std::uint64_t(std::max(1, m_params.adaptationPeriod)) == 0;
+  // (a step between two synchronised ones that holds no particle is a full step: where nothing can be held,
+  // time_levels = 2 runs as one time step does)
+  const bool adaptNow = adaptive() && (syncStep || st.heldParticles == 0) &&
+                        m_stepCount % std::uint64_t(std::max(1, m_params.adaptationPeriod)) == 0;
   // the levels of every levels_period-th adaptation step; the optimal masses are kept in between. Their
   // neighbour sums come with the density pass.
   const bool levelsNow = adaptNow && m_stepCount % (std::uint64_t(std::max(1, m_params.adaptationPeriod)) *
