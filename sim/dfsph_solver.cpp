@@ -163,13 +163,14 @@ double DfsphSolver::densityAndFactor(SolverContext& ctx, LevelSums* levels) {
       levels->nuSum[i] = nuSum;
       levels->weightSum[i] = weightSum;
     }
-    return double(std::max(density - Real(1), Real(0)));
+    // (a held particle's density is not evaluated: its list is empty; the mean is over the others)
+    return ctx.held && ctx.held[i] ? 0.0 : double(std::max(density - Real(1), Real(0)));
   });
   if constexpr (kLevelSums) {
     std::vector<Real>().swap(levels->rhoBefore);
     levels->filled = true;
   }
-  return compression / double(std::max<std::size_t>(n, 1));
+  return compression / double(std::max<std::size_t>(n - std::min(n, ctx.heldCount), 1));
 }
 
 template <class F>

@@ -22,7 +22,7 @@ struct SolverContext {
   const NeighborList& boundaryNbrs;  ///< boundary neighbours of each fluid particle
   const SimParams& params;           ///< parameters
   /// particles held in this step of multi-rate stepping (1: held), or null: they take no part in the
-  /// solves, and the density solve's mean error is over the others
+  /// solves, and the means of the density pass and the density solve are over the others
   const std::uint8_t* held = nullptr;
   std::size_t heldCount = 0;  ///< how many are held
 };
