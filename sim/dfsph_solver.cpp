@@ -163,14 +163,15 @@ double DfsphSolver::densityAndFactor(SolverContext& ctx, LevelSums* levels) {
       levels->nuSum[i] = nuSum;
       levels->weightSum[i] = weightSum;
     }
-    // (a held particle's density is not evaluated: its list is empty; the mean is over the others)
+    // (a held particle's density is not evaluated: its list is empty; it adds nothing here, and the caller
+    // counts it with the density it was held with)
     return ctx.held && ctx.held[i] ? 0.0 : double(std::max(density - Real(1), Real(0)));
   });
   if constexpr (kLevelSums) {
     std::vector<Real>().swap(levels->rhoBefore);
     levels->filled = true;
   }
-  return compression / double(std::max<std::size_t>(n - std::min(n, ctx.heldCount), 1));
+  return compression / double(std::max<std::size_t>(n, 1));
 }
 
 template <class F>
@@ -287,7 +288,8 @@ SolveResult DfsphSolver::divergenceSolve(SolverContext& ctx, Real dt) {
     } else {
       sum = densityRatePass(ctx, stiffness);
     }
-    result.error = sum / double(n) * double(dt);
+    // (held particles add nothing: the mean is over the others, as the density solve's)
+    result.error = sum / double(std::max<std::size_t>(1, n - std::min(n, ctx.heldCount))) * double(dt);
     // at least one iteration, as in the reference implementation (min_iterations applies to the density
     // solve)
     if ((result.iterations >= 1 && result.error <= tolerance) ||

@@ -22,7 +22,7 @@ struct SolverContext {
   const NeighborList& boundaryNbrs;  ///< boundary neighbours of each fluid particle
   const SimParams& params;           ///< parameters
   /// particles held in this step of multi-rate stepping (1: held), or null: they take no part in the
-  /// solves, and the means of the density pass and the density solve are over the others
+  /// solves, and the means of both solves are over the others
   const std::uint8_t* held = nullptr;
   std::size_t heldCount = 0;  ///< how many are held
 };
@@ -55,8 +55,8 @@ struct LevelSums {
 class DfsphSolver {
  public:
   /// rho_i and the DFSPH factor alpha_i (eq. 11 of Bender & Koschier 2017); returns the mean compression
-  /// max(0, rho/rho0 - 1) over particles. With `levels` it also fills the levels' neighbour sums (resized to
-  /// the particle count) in the same pass.
+  /// max(0, rho/rho0 - 1) over particles (a held one adds nothing). With `levels` it also fills the levels'
+  /// neighbour sums (resized to the particle count) in the same pass.
   double computeDensityAndFactor(SolverContext& ctx, LevelSums* levels = nullptr);
   /// divergence-free solve (Algorithm 2 of Bender & Koschier 2017) for step size dt
   SolveResult divergenceSolve(SolverContext& ctx, Real dt);

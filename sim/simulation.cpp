@@ -699,8 +699,10 @@ std::size_t Simulation::holdCoarse() {
       m_fluid.kappaV[i] = 0;
     }
   });
-  dropNeighbors(m_fluidNbrs, mark, m_dropScratch);
-  dropNeighbors(m_boundaryNbrs, mark, m_dropScratch);
+  // (a scratch each: the two lists' sizes differ by an order of magnitude, and a shared one would hand each
+  // list the other's arrays, reallocated at the next search)
+  dropNeighbors(m_fluidNbrs, mark, m_dropScratchFluid);
+  dropNeighbors(m_boundaryNbrs, mark, m_dropScratchBoundary);
   return h;
 }
 
@@ -849,6 +851,20 @@ void Simulation::step() {
   const bool levelSums =
       levelsNow && m_mode == AdaptivityMode::FluidPlaying;  // (vorticity, velocity difference)
   st.densityError = m_solver.computeDensityAndFactor(ctx, levelSums ? &m_levelSums : nullptr);
+  if (!m_held.empty()) {
+    // a held particle's density is not evaluated in this step (its list is empty; it counted as no error): it
+    // counts with the density it was held with, so that the step's mean stays one over every particle
+    const double invRho0 = 1.0 / m_params.restDensity;
+    const double held = parallelDeterministicReduce(
+        tbb::blocked_range<std::size_t>(0, m_held.size(), 4096), 0.0,
+        [&](const tbb::blocked_range<std::size_t>& r, double acc) {
+          for (std::size_t k = r.begin(); k < r.end(); ++k)
+            acc += std::max(0.0, double(m_heldRho[k]) * invRho0 - 1.0);
+          return acc;
+        },
+        [](double a, double b) { return a + b; });
+    st.densityError += held / double(n);
+  }
   restoreHeld(m_fluid.rho, m_heldRho);
   auto t3 = Clock::now();
   st.times.density = seconds(t2, t3);
@@ -983,8 +999,10 @@ std::vector<MemoryItem> Simulation::memoryBreakdown() const {
   countVector(held, m_heldNbrs.indices);
   countVector(held, m_heldNbrs.chunkCounts);
   countVector(held, m_heldMask);
-  countVector(held, m_dropScratch.offsets);
-  countVector(held, m_dropScratch.indices);
+  countVector(held, m_dropScratchFluid.offsets);
+  countVector(held, m_dropScratchFluid.indices);
+  countVector(held, m_dropScratchBoundary.offsets);
+  countVector(held, m_dropScratchBoundary.indices);
   countVector(held, m_timeLevelCandidate);
   out.push_back(held);
   MemoryItem cells{"grid: cell ranges (fluid, static, kinematic), sort order, walls' clearance", 0, 0};

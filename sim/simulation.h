@@ -205,7 +205,8 @@ class Simulation {
   // time levels (time_levels = 2): particles held this step, and their saved fields
   std::vector<std::uint32_t> m_held;
   std::vector<std::uint8_t> m_heldMask;            // 1 for the particles in m_held (held steps)
-  NeighborList m_dropScratch;                      // dropNeighbors' other arrays (held steps)
+  NeighborList m_dropScratchFluid;                 // dropNeighbors' other arrays for m_fluidNbrs (held steps)
+  NeighborList m_dropScratchBoundary;              // and for m_boundaryNbrs
   std::vector<std::uint8_t> m_timeLevelCandidate;  // assignTimeLevels' candidates
   std::vector<Real> m_heldRho, m_heldKappa, m_heldKappaV;
   std::size_t m_level1 = 0;
