@@ -33,8 +33,9 @@ ParamTable::ParamTable() : ParamTableOf<SimParams>("parameter", &ParamTable::val
       "take their initial velocities)",
       &P::initialRelaxation, 20);
   add("time_levels", "time stepping", "-", 1, 2, live,
-      "1: one time step for all; 2: particles whose own CFL allows twice the step (and their neighbours') "
-      "skip the solves every other step and drift (docs/method.md, Time levels)",
+      "1: one time step for all; 2: particles whose own CFL allows twice the step (and their neighbours'), "
+      "twice the step within dt_max, skip the solves every other step and drift (docs/method.md, Time "
+      "levels)",
       &P::timeLevels, 1);
   // pressure solver (DFSPH)
   add("density_tolerance", "solver", "%", 1e-4, 10.0, live, "allowed mean density error in percent of rho0",

@@ -810,9 +810,9 @@ void Simulation::step() {
   const bool multiRate = m_params.timeLevels > 1;
   const bool syncStep = !multiRate || m_stepCount % 2 == 0;
   st.heldParticles = syncStep ? 0 : holdCoarse();
-  if (multiRate && syncStep && m_heldLastStep) {
+  if (syncStep && m_heldLastStep) {
     // the particles held in the last step drifted through it: they get its gravity impulse now, so every
-    // particle receives gravity for every step
+    // particle receives gravity for every step (also when time_levels was set to 1 since: it is live)
     const Vec3 g(Real(m_params.gravity[0]), Real(m_params.gravity[1]), Real(m_params.gravity[2]));
     parallelFor(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
       for (std::size_t i = r.begin(); i < r.end(); ++i) {

@@ -126,3 +126,30 @@ TEST(TimeLevelsTest, HeldParticlesSmallDoNotStallTheDensitySolve) {
   EXPECT_LT(itersTwo, itersOne + 1.0);
   EXPECT_LT(itersTwo, 0.2 * double(scene.params.maxIterations));
 }
+
+TEST(TimeLevelsTest, SwitchedOffLiveAfterAHeldStepSmallStillGivesItsGravity) {
+  // time_levels is live (the panel): set to 1 right after a held step, the next step must still give the held
+  // particles the gravity impulse they drifted without
+  SceneDesc scene = tankScene(Vec3d(0.3, 0.2, 0.1), Vec3d(-0.3, 0.0, -0.1), Vec3d(-0.05, 0.3, 0.1), 0.008);
+  scene.mode = AdaptivityMode::UniformHigh;
+  scene.params.timeLevels = 2;
+  Simulation sim(scene);
+  const double mass0 = sim.totalMass();
+  const Vec3d p0 = sim.totalMomentum();
+  const double t0 = sim.time();
+  bool switched = false;
+  while (sim.time() < 0.3) {
+    sim.step();
+    if (!switched && sim.time() > 0.15 && sim.lastStep().heldParticles > 0) {
+      sim.params().timeLevels = 1;
+      switched = true;
+    }
+  }
+  ASSERT_TRUE(switched);
+  const Vec3d gravityImpulse = mass0 * (sim.time() - t0) * Vec3d(0, -9.81, 0);
+  const Vec3d residual = sim.totalMomentum() - p0 - gravityImpulse - sim.boundaryImpulse();
+  std::printf("switched off after a held step: momentum residual %.2e of the gravity impulse\n",
+              residual.norm() / gravityImpulse.norm());
+  // one step's gravity of the held particles is about 1e-3 of the impulse over 0.3 s
+  EXPECT_LT(residual.norm(), 2e-4 * gravityImpulse.norm()) << residual.transpose();
+}
