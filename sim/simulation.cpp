@@ -48,41 +48,57 @@ constexpr double kLatticeSupportScale = 1.2;
 /// acceleration through every other step (docs/method.md, Time levels).
 constexpr std::uint32_t kFlagTimeLevel1 = 1u << 16;
 
-/// Drops the neighbours of the particles marked in `held` from `list`, in place: they take no part in this
-/// step's solves.
-void dropNeighbors(NeighborList& list, const std::vector<std::uint8_t>& held, NeighborList& scratch) {
-  // blocks of rows count what they keep, then copy it from their offsets into `scratch`, which is swapped in
-  // (the result does not depend on the thread count; the old arrays are the next call's scratch)
+/// Rows of `in` filtered into `out`: for k in [0, rows), out's row k holds the entries j of in's row rowOf(k)
+/// with keepEntry(j), or none where !keepRow(k). Blocks of rows count what they keep, then write it from
+/// their offsets, so the result does not depend on the thread count.
+template <class RowOf, class KeepRow, class KeepEntry>
+void filterRows(const NeighborList& in, std::size_t rows, const RowOf& rowOf, const KeepRow& keepRow,
+                const KeepEntry& keepEntry, NeighborList& out) {
   using Range = tbb::blocked_range<std::size_t>;
   constexpr std::size_t kBlock = 2048;
-  const std::size_t n = list.offsets.size() - 1;
-  const std::size_t blocks = (n + kBlock - 1) / kBlock;
+  const std::size_t blocks = (rows + kBlock - 1) / kBlock;
   std::vector<std::uint32_t> first(blocks + 1, 0);
   parallelFor(Range(0, blocks, 1), [&](const Range& r) {
     for (std::size_t b = r.begin(); b < r.end(); ++b) {
       std::uint32_t count = 0;
-      for (std::size_t i = b * kBlock; i < std::min(n, (b + 1) * kBlock); ++i)
-        count += held[i] ? 0 : list.offsets[i + 1] - list.offsets[i];
+      for (std::size_t k = b * kBlock; k < std::min(rows, (b + 1) * kBlock); ++k) {
+        if (!keepRow(k))
+          continue;
+        const std::size_t i = rowOf(k);
+        for (std::uint32_t q = in.offsets[i]; q < in.offsets[i + 1]; ++q)
+          count += keepEntry(in.indices[q]) ? 1 : 0;
+      }
       first[b + 1] = count;
     }
   });
   for (std::size_t b = 0; b < blocks; ++b)
     first[b + 1] += first[b];
-  scratch.offsets.resize(n + 1);
-  scratch.indices.resize(first[blocks]);
+  out.offsets.resize(rows + 1);
+  out.indices.resize(first[blocks]);
   parallelFor(Range(0, blocks, 1), [&](const Range& r) {
     for (std::size_t b = r.begin(); b < r.end(); ++b) {
       std::uint32_t write = first[b];
-      for (std::size_t i = b * kBlock; i < std::min(n, (b + 1) * kBlock); ++i) {
-        scratch.offsets[i] = write;
-        if (!held[i]) {
-          for (std::uint32_t k = list.offsets[i]; k < list.offsets[i + 1]; ++k)
-            scratch.indices[write++] = list.indices[k];
+      for (std::size_t k = b * kBlock; k < std::min(rows, (b + 1) * kBlock); ++k) {
+        out.offsets[k] = write;
+        if (!keepRow(k))
+          continue;
+        const std::size_t i = rowOf(k);
+        for (std::uint32_t q = in.offsets[i]; q < in.offsets[i + 1]; ++q) {
+          if (keepEntry(in.indices[q]))
+            out.indices[write++] = in.indices[q];
         }
       }
     }
   });
-  scratch.offsets[n] = first[blocks];
+  out.offsets[rows] = first[blocks];
+}
+
+/// Empties the rows of the particles marked in `held` in `list`: they take no part in this step's solves. The
+/// rows are filtered into `scratch`, which is swapped in (the old arrays are the next call's scratch).
+void dropNeighbors(NeighborList& list, const std::vector<std::uint8_t>& held, NeighborList& scratch) {
+  filterRows(
+      list, list.offsets.size() - 1, [](std::size_t k) { return k; }, [&](std::size_t k) { return !held[k]; },
+      [](std::uint32_t) { return true; }, scratch);
   std::swap(list.offsets, scratch.offsets);
   std::swap(list.indices, scratch.indices);
 }
@@ -665,32 +681,16 @@ std::size_t Simulation::holdCoarse() {
       m_heldMask[m_held[k]] = 1;
   });
   const std::vector<std::uint8_t>& mark = m_heldMask;
-  // the held particles' active fluid neighbours, for the reaction of their pressure: counted, then written
-  // from their offsets
-  m_heldNbrs.offsets.assign(h + 1, 0);
-  parallelFor(Range(0, h, 1024), [&](const Range& r) {
-    for (std::size_t k = r.begin(); k < r.end(); ++k) {
-      const std::uint32_t i = m_held[k];
-      std::uint32_t count = 0;
-      for (std::uint32_t q = m_fluidNbrs.offsets[i]; q < m_fluidNbrs.offsets[i + 1]; ++q)
-        count += mark[m_fluidNbrs.indices[q]] ? 0 : 1;
-      m_heldNbrs.offsets[k + 1] = count;
-    }
-  });
-  for (std::size_t k = 0; k < h; ++k)
-    m_heldNbrs.offsets[k + 1] += m_heldNbrs.offsets[k];
-  m_heldNbrs.indices.resize(m_heldNbrs.offsets[h]);
+  // the held particles' active fluid neighbours, for the reaction of their pressure
+  filterRows(
+      m_fluidNbrs, h, [&](std::size_t k) { return m_held[k]; }, [](std::size_t) { return true; },
+      [&](std::uint32_t j) { return !mark[j]; }, m_heldNbrs);
   m_heldRho.resize(h);
   m_heldKappa.resize(h);
   m_heldKappaV.resize(h);
   parallelFor(Range(0, h, 1024), [&](const Range& r) {
     for (std::size_t k = r.begin(); k < r.end(); ++k) {
       const std::uint32_t i = m_held[k];
-      std::uint32_t write = m_heldNbrs.offsets[k];
-      for (std::uint32_t q = m_fluidNbrs.offsets[i]; q < m_fluidNbrs.offsets[i + 1]; ++q) {
-        if (!mark[m_fluidNbrs.indices[q]])
-          m_heldNbrs.indices[write++] = m_fluidNbrs.indices[q];
-      }
       m_heldRho[k] = m_fluid.rho[i];
       m_heldKappa[k] = m_fluid.kappa[i];
       m_heldKappaV[k] = m_fluid.kappaV[i];
