@@ -89,6 +89,74 @@ TEST(NeighborSearchTest, EqualsBruteForceWithMixedSizes) {
   EXPECT_GT(mixedPairs, 1000u);
 }
 
+TEST(NeighborSearchTest, RebuildWhereSomeListsOutgrowTheirRoomGivesTheBruteForceLists) {
+  // A build places each chunk of 128 query points in a room sized from that chunk's lists at the last
+  // build, plus a sixteenth and 64 entries. Here the second and third builds make some chunks' lists several
+  // times longer (they spill past their rooms, and the chunks after them must move right to make space) and
+  // others shorter (they move left): every list must still be the brute-force one, on 1 and 2 threads.
+  const Aabb box(Vec3d(0.0, 0.0, 0.0), Vec3d(0.5, 0.4, 0.3));
+  const Real h = 0.03f;
+  Cloud c = randomCloud(4000, h, 0.0, 41, box);
+  UniformGrid grid;
+  grid.setup(box, h);
+  std::vector<std::uint32_t> cells;
+  sortByCell(grid, c, cells);
+  auto bruteForce = [&](const std::vector<Real>& H, std::size_t i) {
+    std::set<std::uint32_t> expected;
+    for (std::size_t j = 0; j < c.x.size(); ++j) {
+      const Real hij = pairSupport(H[i], H[j]);
+      if (j != i && (c.x[i] - c.x[j]).squaredNorm() < hij * hij)
+        expected.insert(std::uint32_t(j));
+    }
+    return expected;
+  };
+  // supports per build: all h; then chunks 2, 5 and 6 at 2.5 h and chunk 9 at h / 2; then the other way
+  // round (chunk 9 large, chunks 2, 5 and 6 small)
+  auto supports = [&](int build) {
+    std::vector<Real> H(c.x.size(), h);
+    for (std::size_t i = 0; i < H.size() && build > 0; ++i) {
+      const std::size_t chunk = i / 128;
+      const bool grown = chunk == 2 || chunk == 5 || chunk == 6;
+      if (grown || chunk == 9)
+        H[i] = (grown == (build == 1)) ? Real(2.5) * h : Real(0.5) * h;
+    }
+    return H;
+  };
+  for (int threads : {1, 2}) {
+    tbb::global_control gc(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
+    NeighborSearch search;
+    NeighborList list;
+    std::vector<std::size_t> lastChunkEntries;
+    for (int build = 0; build < 3; ++build) {
+      const std::vector<Real> H = supports(build);
+      const Real maxH = *std::max_element(H.begin(), H.end());
+      search.build(grid, c.x, H, {GridPoints{c.x.data(), H.data(), 0, &cells, 0}}, 0, maxH, list);
+      ASSERT_EQ(list.offsets.size(), c.x.size() + 1);
+      ASSERT_EQ(list.indices.size(), std::size_t(list.offsets.back()));
+      for (std::size_t i = 0; i < c.x.size(); ++i) {
+        ASSERT_EQ(listOf(list, i), bruteForce(H, i))
+            << threads << " thread(s), build " << build << ", point " << i;
+        ASSERT_EQ(list.count(i), bruteForce(H, i).size()) << "duplicates, point " << i;
+      }
+      // the case this test is for: a grown chunk's lists are far beyond the room the last build left it
+      std::vector<std::size_t> chunkEntries;
+      for (std::size_t i0 = 0; i0 < c.x.size(); i0 += 128) {
+        const std::size_t i1 = std::min(c.x.size(), i0 + 128);
+        chunkEntries.push_back(list.offsets[i1] - list.offsets[i0]);
+      }
+      if (build > 0) {
+        for (std::size_t chunk :
+             build == 1 ? std::vector<std::size_t>{2, 5, 6} : std::vector<std::size_t>{9}) {
+          const std::size_t last = lastChunkEntries[chunk];
+          EXPECT_GT(chunkEntries[chunk], 2 * (last + last / 16 + 64))
+              << "chunk " << chunk << ", build " << build;
+        }
+      }
+      lastChunkEntries = chunkEntries;
+    }
+  }
+}
+
 TEST(NeighborSearchTest, FindsBoundaryNeighborsAcrossTwoSources) {
   const Aabb box(Vec3d(0, 0, 0), Vec3d(0.5, 0.5, 0.5));
   const Real h = 0.05f;
