@@ -653,8 +653,12 @@ void NeighborSearch::buildLists(const UniformGrid& grid, const std::vector<Vec3>
   // particles gain and lose neighbours faster than the rooms' slack), and the new array, its page faults,
   // the reallocation of the next build's rooms and their zero-filling cost more than the search itself.
   const std::size_t needed = listStart[nChunks];
-  if (needed > out.indices.size())
+  if (needed > out.indices.size()) {
+    // (with the rooms' slack, not the doubling a resize past the capacity would make)
+    if (needed > out.indices.capacity())
+      out.indices.reserve(needed + needed / 16);
     out.indices.resize(needed);
+  }
   std::uint32_t* lists = out.indices.data();
   auto moveChunk = [&](std::size_t chunk) {
     const std::size_t room = roomStart[chunk + 1] - roomStart[chunk];
@@ -676,8 +680,9 @@ void NeighborSearch::buildLists(const UniformGrid& grid, const std::vector<Vec3>
   // The first build's rooms are a guess (32 a query point, where walls give a handful), and lists shrink when
   // coarse particles replace fine ones: capacity beyond what the next build's rooms need is released (the
   // dam break's wall lists held 130 bytes a particle of it).
+  // (Not for buildSymmetric's own lists: it sizes the array for the whole lists.)
   const std::size_t nextRooms = listStart[nChunks] + listStart[nChunks] / 16 + 64 * nChunks;
-  if (out.indices.capacity() > 2 * nextRooms) {
+  if (!ownSupport && out.indices.capacity() > nextRooms + nextRooms / 8) {
     std::vector<std::uint32_t> fitted;
     fitted.reserve(nextRooms + nextRooms / 16);
     fitted.assign(out.indices.begin(), out.indices.end());
@@ -784,9 +789,13 @@ void NeighborSearch::buildSymmetric(const UniformGrid& grid, const std::vector<V
     }
   });
   out.offsets[n] = std::uint32_t(total);
-  if (out.indices.capacity() > 2 * (total + total / 16)) {
+  // capacity for the whole lists with a sixteenth of slack; more than an eighth beyond that is released
+  const std::size_t wanted = total + total / 16;
+  if (out.indices.capacity() < total) {
+    out.indices.reserve(wanted);
+  } else if (out.indices.capacity() > wanted + wanted / 8) {
     std::vector<std::uint32_t> fitted;
-    fitted.reserve(total + total / 16);
+    fitted.reserve(wanted);
     fitted.assign(out.indices.begin(), out.indices.end());
     out.indices.swap(fitted);
   }
