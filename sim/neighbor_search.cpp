@@ -31,6 +31,15 @@ constexpr std::size_t kLightChunks = 64;
 // it gets the slack of an empty list, not the first build's guess of 32 a point (the wall lists of the water
 // away from the walls were given that guess in every build, room zero-filled and closed up again).
 constexpr std::uint32_t kUnseenChunk = std::numeric_limits<std::uint32_t>::max();
+// A chunk's room: its lists at the last build and a thirty-second of slack (a chunk that outgrows it spills,
+// closed up in place). Capacity for lists gets a thirty-second too. (A sixteenth of each held the reference
+// dam break's lists at 17 bytes a fluid particle above their size once spills no longer reallocated them.)
+inline std::size_t roomFor(std::size_t last) {
+  return last + last / 32 + 32;
+}
+inline std::size_t withSlack(std::size_t entries) {
+  return entries + entries / 32;
+}
 // UniformGrid::sort: below this many points a serial counting sort, above it TBB's parallel sort
 constexpr std::size_t kRadixSortBelow = 16384;
 
@@ -626,15 +635,15 @@ void NeighborSearch::buildLists(const UniformGrid& grid, const std::vector<Vec3>
   };
 
   for (std::size_t chunk = 0; chunk < nChunks; ++chunk) {
-    // last build's count with a sixteenth of slack (a chunk that outgrows it spills, see above); a chunk
+    // last build's count with slack (roomFor; a chunk that outgrows it spills, see above); a chunk
     // never seen gets a guess
     const std::uint32_t last = out.chunkCounts[chunk];
-    const std::size_t room = last == kUnseenChunk ? 32 * kChunk : last + last / 16 + 64;
+    const std::size_t room = last == kUnseenChunk ? 32 * kChunk : roomFor(last);
     roomStart[chunk + 1] = roomStart[chunk] + room;
   }
   const std::size_t total = roomStart[nChunks];
   if (out.indices.capacity() < total)
-    out.indices.reserve(total + total / 16);
+    out.indices.reserve(withSlack(total));
   out.indices.resize(total);
   parallelFor(tbb::blocked_range<std::size_t>(0, nChunks, 1), [&](const tbb::blocked_range<std::size_t>& cr) {
     for (std::size_t chunk = cr.begin(); chunk < cr.end(); ++chunk)
@@ -656,7 +665,7 @@ void NeighborSearch::buildLists(const UniformGrid& grid, const std::vector<Vec3>
   if (needed > out.indices.size()) {
     // (with the rooms' slack, not the doubling a resize past the capacity would make)
     if (needed > out.indices.capacity())
-      out.indices.reserve(needed + needed / 16);
+      out.indices.reserve(withSlack(needed));
     out.indices.resize(needed);
   }
   std::uint32_t* lists = out.indices.data();
@@ -681,10 +690,10 @@ void NeighborSearch::buildLists(const UniformGrid& grid, const std::vector<Vec3>
   // coarse particles replace fine ones: capacity beyond what the next build's rooms need is released (the
   // dam break's wall lists held 130 bytes a particle of it).
   // (Not for buildSymmetric's own lists: it sizes the array for the whole lists.)
-  const std::size_t nextRooms = listStart[nChunks] + listStart[nChunks] / 16 + 64 * nChunks;
+  const std::size_t nextRooms = roomFor(listStart[nChunks]) + 32 * (nChunks - 1);
   if (!ownSupport && out.indices.capacity() > nextRooms + nextRooms / 8) {
     std::vector<std::uint32_t> fitted;
-    fitted.reserve(nextRooms + nextRooms / 16);
+    fitted.reserve(withSlack(nextRooms));
     fitted.assign(out.indices.begin(), out.indices.end());
     out.indices.swap(fitted);
   }
@@ -707,7 +716,7 @@ void NeighborSearch::buildSymmetric(const UniformGrid& grid, const std::vector<V
   const std::size_t nChunks = (n + kChunk - 1) / kChunk;
   // room for the whole lists of the last build, so that widening the own lists below seldom reallocates
   if (out.indices.capacity() < m_lastTotal)
-    out.indices.reserve(m_lastTotal + m_lastTotal / 16);
+    out.indices.reserve(withSlack(m_lastTotal));
   // A fine point next to coarse ones otherwise searches as far as the coarsest pair support, twice its own
   // in the adaptive modes; here it searches as far as its own, and the pairs with larger points come from
   // theirs (a pair is within reach of the larger point's support). The own lists are written straight into
@@ -789,8 +798,8 @@ void NeighborSearch::buildSymmetric(const UniformGrid& grid, const std::vector<V
     }
   });
   out.offsets[n] = std::uint32_t(total);
-  // capacity for the whole lists with a sixteenth of slack; more than an eighth beyond that is released
-  const std::size_t wanted = total + total / 16;
+  // capacity for the whole lists with slack; more than an eighth beyond that is released
+  const std::size_t wanted = withSlack(total);
   if (out.indices.capacity() < total) {
     out.indices.reserve(wanted);
   } else if (out.indices.capacity() > wanted + wanted / 8) {
