@@ -465,7 +465,7 @@ void NeighborSearch::buildLists(const UniformGrid& grid, const std::vector<Vec3>
   // Lists are written once, straight into `out.indices`: each chunk of query points gets a room sized from
   // its count in the previous build plus slack, and the rooms are then closed up in place. A chunk that
   // outgrows its room (the first build; adaptivity moving coarse particles into it) spills the rest into a
-  // buffer, and only then are the lists gathered into a new array.
+  // buffer, copied behind its list when the rooms are closed up.
   out.chunkCounts.resize(nChunks, kUnseenChunk);
   std::vector<std::size_t> roomStart(nChunks + 1, 0);
   std::vector<std::uint8_t> overflowed(nChunks, 0);
@@ -662,10 +662,12 @@ void NeighborSearch::buildLists(const UniformGrid& grid, const std::vector<Vec3>
   // particles gain and lose neighbours faster than the rooms' slack), and the new array, its page faults,
   // the reallocation of the next build's rooms and their zero-filling cost more than the search itself.
   const std::size_t needed = listStart[nChunks];
+  // the rooms the next build will ask for, at most (roomFor of every chunk's lists)
+  const std::size_t nextRooms = needed + needed / 32 + 32 * nChunks;
   if (needed > out.indices.size()) {
-    // (with the rooms' slack, not the doubling a resize past the capacity would make)
+    // (room for the next build's rooms too, not the doubling a resize past the capacity would make)
     if (needed > out.indices.capacity())
-      out.indices.reserve(withSlack(needed));
+      out.indices.reserve(withSlack(nextRooms));
     out.indices.resize(needed);
   }
   std::uint32_t* lists = out.indices.data();
@@ -690,7 +692,6 @@ void NeighborSearch::buildLists(const UniformGrid& grid, const std::vector<Vec3>
   // coarse particles replace fine ones: capacity beyond what the next build's rooms need is released (the
   // dam break's wall lists held 130 bytes a particle of it).
   // (Not for buildSymmetric's own lists: it sizes the array for the whole lists.)
-  const std::size_t nextRooms = roomFor(listStart[nChunks]) + 32 * (nChunks - 1);
   if (!ownSupport && out.indices.capacity() > nextRooms + nextRooms / 8) {
     std::vector<std::uint32_t> fitted;
     fitted.reserve(withSlack(nextRooms));
@@ -798,8 +799,11 @@ void NeighborSearch::buildSymmetric(const UniformGrid& grid, const std::vector<V
     }
   });
   out.offsets[n] = std::uint32_t(total);
-  // capacity for the whole lists with slack; more than an eighth beyond that is released
-  const std::size_t wanted = withSlack(total);
+  // capacity for the whole lists with slack, and at least for the rooms the next build of the own lists asks
+  // for (sparse lists, a few pairs a point, need more for those than for the whole lists); more than an
+  // eighth beyond that is released
+  const std::size_t own = ownOff[n];
+  const std::size_t wanted = withSlack(std::max(total, own + own / 32 + 32 * nChunks));
   if (out.indices.capacity() < total) {
     out.indices.reserve(wanted);
   } else if (out.indices.capacity() > wanted + wanted / 8) {

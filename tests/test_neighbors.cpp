@@ -91,9 +91,10 @@ TEST(NeighborSearchTest, EqualsBruteForceWithMixedSizes) {
 
 TEST(NeighborSearchTest, RebuildWhereSomeListsOutgrowTheirRoomGivesTheBruteForceLists) {
   // A build places each chunk of 128 query points in a room sized from that chunk's lists at the last
-  // build, plus a sixteenth and 64 entries. Here the second and third builds make some chunks' lists several
-  // times longer (they spill past their rooms, and the chunks after them must move right to make space) and
-  // others shorter (they move left): every list must still be the brute-force one, on 1 and 2 threads.
+  // build, plus a thirty-second and 32 entries. Here later builds make some chunks' lists several times
+  // longer (they spill past their rooms, and the chunks after them must move right to make space) and others
+  // shorter (they move left), the last one with a chunk that moves left between chunks that move right: every
+  // list must still be the brute-force one, for build() and buildSymmetric(), on 1 and 2 threads.
   const Aabb box(Vec3d(0.0, 0.0, 0.0), Vec3d(0.5, 0.4, 0.3));
   const Real h = 0.03f;
   Cloud c = randomCloud(4000, h, 0.0, 41, box);
@@ -110,33 +111,41 @@ TEST(NeighborSearchTest, RebuildWhereSomeListsOutgrowTheirRoomGivesTheBruteForce
     }
     return expected;
   };
-  // supports per build: all h; then chunks 2, 5 and 6 at 2.5 h and chunk 9 at h / 2; then the other way
-  // round (chunk 9 large, chunks 2, 5 and 6 small)
-  auto supports = [&](int build) {
+  // per build, the chunks whose supports are not h and their factor, and the chunks whose lists that makes
+  // outgrow the room the last build left them
+  const std::vector<std::vector<std::pair<std::size_t, Real>>> changed = {
+      {},
+      {{2, 2.5f}, {5, 2.5f}, {6, 2.5f}, {9, 0.5f}},
+      {{2, 0.5f}, {5, 0.5f}, {6, 0.5f}, {9, 2.5f}},
+      {{2, 2.5f}, {5, 0.5f}, {6, 0.5f}, {9, 0.3f}, {12, 2.5f}}};
+  const std::vector<std::vector<std::size_t>> outgrown = {{}, {2, 5, 6}, {9}, {2, 12}};
+  auto supports = [&](std::size_t build) {
     std::vector<Real> H(c.x.size(), h);
-    for (std::size_t i = 0; i < H.size() && build > 0; ++i) {
-      const std::size_t chunk = i / 128;
-      const bool grown = chunk == 2 || chunk == 5 || chunk == 6;
-      if (grown || chunk == 9)
-        H[i] = (grown == (build == 1)) ? Real(2.5) * h : Real(0.5) * h;
+    for (const auto& [chunk, factor] : changed[build]) {
+      for (std::size_t i = chunk * 128; i < std::min(H.size(), (chunk + 1) * 128); ++i)
+        H[i] = factor * h;
     }
     return H;
   };
   for (int threads : {1, 2}) {
     tbb::global_control gc(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
-    NeighborSearch search;
-    NeighborList list;
+    NeighborSearch search, symmetric;
+    NeighborList list, symmetricList;
     std::vector<std::size_t> lastChunkEntries;
-    for (int build = 0; build < 3; ++build) {
+    for (std::size_t build = 0; build < changed.size(); ++build) {
       const std::vector<Real> H = supports(build);
       const Real maxH = *std::max_element(H.begin(), H.end());
       search.build(grid, c.x, H, {GridPoints{c.x.data(), H.data(), 0, &cells, 0}}, 0, maxH, list);
-      ASSERT_EQ(list.offsets.size(), c.x.size() + 1);
-      ASSERT_EQ(list.indices.size(), std::size_t(list.offsets.back()));
-      for (std::size_t i = 0; i < c.x.size(); ++i) {
-        ASSERT_EQ(listOf(list, i), bruteForce(H, i))
-            << threads << " thread(s), build " << build << ", point " << i;
-        ASSERT_EQ(list.count(i), bruteForce(H, i).size()) << "duplicates, point " << i;
+      symmetric.buildSymmetric(grid, c.x, H, cells, maxH, symmetricList);
+      for (const NeighborList* l : {&list, &symmetricList}) {
+        ASSERT_EQ(l->offsets.size(), c.x.size() + 1);
+        ASSERT_EQ(l->indices.size(), std::size_t(l->offsets.back()));
+        for (std::size_t i = 0; i < c.x.size(); ++i) {
+          const std::set<std::uint32_t> expected = bruteForce(H, i);
+          ASSERT_EQ(listOf(*l, i), expected) << threads << " thread(s), build " << build << ", point " << i
+                                             << (l == &list ? " (build)" : " (buildSymmetric)");
+          ASSERT_EQ(l->count(i), expected.size()) << "duplicates, point " << i;
+        }
       }
       // the case this test is for: a grown chunk's lists are far beyond the room the last build left it
       std::vector<std::size_t> chunkEntries;
@@ -144,13 +153,25 @@ TEST(NeighborSearchTest, RebuildWhereSomeListsOutgrowTheirRoomGivesTheBruteForce
         const std::size_t i1 = std::min(c.x.size(), i0 + 128);
         chunkEntries.push_back(list.offsets[i1] - list.offsets[i0]);
       }
-      if (build > 0) {
-        for (std::size_t chunk :
-             build == 1 ? std::vector<std::size_t>{2, 5, 6} : std::vector<std::size_t>{9}) {
-          const std::size_t last = lastChunkEntries[chunk];
-          EXPECT_GT(chunkEntries[chunk], 2 * (last + last / 16 + 64))
-              << "chunk " << chunk << ", build " << build;
+      for (std::size_t chunk : outgrown[build]) {
+        const std::size_t last = lastChunkEntries[chunk];
+        EXPECT_GT(chunkEntries[chunk], 2 * (last + last / 32 + 32))
+            << "chunk " << chunk << ", build " << build;
+      }
+      if (build == 3) {
+        // where each chunk's room started (its lists at the last build plus slack) and where its lists start
+        // now: the chunks after chunk 2 move right, those after chunk 9 left, those after chunk 12 right
+        // again
+        std::vector<int> direction;
+        std::size_t room = 0, start = 0;
+        for (std::size_t k = 0; k < chunkEntries.size(); ++k) {
+          direction.push_back(start > room ? 1 : start < room ? -1 : 0);
+          room += lastChunkEntries[k] + lastChunkEntries[k] / 32 + 32;
+          start += chunkEntries[k];
         }
+        EXPECT_EQ(direction[4], 1);
+        EXPECT_EQ(direction[11], -1);
+        EXPECT_EQ(direction[14], 1);
       }
       lastChunkEntries = chunkEntries;
     }
