@@ -609,11 +609,11 @@ Real receiverBelow(const SimParams& params, bool all) {
 /// Whether fluid particle j may receive from `donor` (locks aside): light enough, and within their pair
 /// support; then `distance` and `room`, j's term of the donor's capacity.
 inline bool receiverRoom(const ParticleSet& p, std::size_t donor, std::uint32_t j, Real below, double rate,
-                         Real& distance, double& room) {
+                         Real& distance, double& room, Real reach = Real(1)) {
   if (p.m[j] >= below * p.mOpt[j])
     return false;
   distance = (p.x[j] - p.x[donor]).norm();
-  if (distance >= pairSupport(p.H[j], p.H[donor]))
+  if (distance >= reach * pairSupport(p.H[j], p.H[donor]))
     return false;
   room = std::min(double(p.mOpt[j]) - double(p.m[j]), rate * double(p.m[j]));
   return true;
@@ -638,22 +638,13 @@ double Adaptivity::capacityBound(const AdaptContext& ctx, std::size_t donor, boo
   const Real below = receiverBelow(ctx.params, all);
   // (receivers up to a hair beyond the pair support count too: a build that fuses the distance's
   // multiply-adds differently here than in transferMass() must not leave out a receiver that one counts)
-  // The test is on squared distances (no square root a neighbour: the bound is taken for every too-light and
-  // every heavy particle in every adaptation step, some 190 a step on the propeller at r = 0.0088 m); with
-  // the hair of reach, a receiver transferMass() takes (|x_ij| < H_ij) always counts here.
   constexpr Real kReach = Real(1) + Real(1e-5);
-  const Vec3 xd = p.x[donor];
-  const Real Hd = p.H[donor];
   double bound = 0.0;
   for (std::uint32_t k = ctx.fluidNbrs.offsets[donor]; k < ctx.fluidNbrs.offsets[donor + 1]; ++k) {
-    const std::uint32_t j = ctx.fluidNbrs.indices[k];
-    if (p.m[j] >= below * p.mOpt[j])
-      continue;
-    const Real reach = kReach * pairSupport(p.H[j], Hd);
-    if ((p.x[j] - xd).squaredNorm() >= reach * reach)
-      continue;
-    const double room = std::min(double(p.mOpt[j]) - double(p.m[j]), rate * double(p.m[j]));
-    bound += std::max(0.0, room);
+    Real distance;
+    double room;
+    if (receiverRoom(p, donor, ctx.fluidNbrs.indices[k], below, rate, distance, room, kReach))
+      bound += std::max(0.0, room);
   }
   return bound;
 }

@@ -34,8 +34,11 @@ constexpr std::uint32_t kUnseenChunk = std::numeric_limits<std::uint32_t>::max()
 // A chunk's room: its lists at the last build and a thirty-second of slack (a chunk that outgrows it spills,
 // closed up in place). Capacity for lists gets a thirty-second too. (A sixteenth of each held the reference
 // dam break's lists at 17 bytes a fluid particle above their size once spills no longer reallocated them.)
+inline std::size_t roomsFor(std::size_t entries, std::size_t chunks) {
+  return entries + entries / 32 + 32 * chunks;
+}
 inline std::size_t roomFor(std::size_t last) {
-  return last + last / 32 + 32;
+  return roomsFor(last, 1);
 }
 inline std::size_t withSlack(std::size_t entries) {
   return entries + entries / 32;
@@ -662,8 +665,8 @@ void NeighborSearch::buildLists(const UniformGrid& grid, const std::vector<Vec3>
   // particles gain and lose neighbours faster than the rooms' slack), and the new array, its page faults,
   // the reallocation of the next build's rooms and their zero-filling cost more than the search itself.
   const std::size_t needed = listStart[nChunks];
-  // the rooms the next build will ask for, at most (roomFor of every chunk's lists)
-  const std::size_t nextRooms = needed + needed / 32 + 32 * nChunks;
+  // the rooms the next build will ask for, at most
+  const std::size_t nextRooms = roomsFor(needed, nChunks);
   if (needed > out.indices.size()) {
     // (room for the next build's rooms too, not the doubling a resize past the capacity would make)
     if (needed > out.indices.capacity())
@@ -803,7 +806,7 @@ void NeighborSearch::buildSymmetric(const UniformGrid& grid, const std::vector<V
   // for (sparse lists, a few pairs a point, need more for those than for the whole lists); more than an
   // eighth beyond that is released
   const std::size_t own = ownOff[n];
-  const std::size_t wanted = withSlack(std::max(total, own + own / 32 + 32 * nChunks));
+  const std::size_t wanted = withSlack(std::max(total, roomsFor(own, nChunks)));
   if (out.indices.capacity() < total) {
     out.indices.reserve(wanted);
   } else if (out.indices.capacity() > wanted + wanted / 8) {
