@@ -13,6 +13,10 @@ ParamTable::ParamTable() : ParamTableOf<SimParams>("parameter", &ParamTable::val
       "radius r of the finest particles (spacing 2r, support 4r)", &P::particleRadius, 0.025);
   add("rest_density", "fluid", "kg/m^3", 100.0, 20000.0, onReset, "rest density rho0", &P::restDensity,
       1000.0);
+  add("lattice_density", "fluid", "-", 0.5, 1.0, onReset,
+      "density of the fluid blocks' starting lattice in units of rho0: 1 = at rest; 0.8 = the reference "
+      "library's particle mass, 0.8 (2r)^3 rho0 (SPlisHSPlasH; such water settles to 0.8 of its block)",
+      &P::latticeDensity, 1.0);
   add("gravity", "fluid", "m/s^2", -100.0, 100.0, live, "gravitational acceleration", &P::gravity,
       std::array<double, 3>{0.0, -9.81, 0.0});
   add("viscosity", "fluid", "-", 0.0, 1.0, live,

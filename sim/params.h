@@ -24,6 +24,7 @@ struct SimParams {
   // fluid
   double particleRadius;
   double restDensity;
+  double latticeDensity;
   std::array<double, 3> gravity;
   double viscosity;
   double boundaryViscosity;

@@ -330,7 +330,9 @@ void Simulation::createFluid() {
   const double r = m_params.particleRadius;
   const double d = 2.0 * r;
   const double rho0 = m_params.restDensity;
-  m_latticeMass = Real(rho0 / latticeKernelSum(4.0 * r, d));
+  // lattice_density < 1 gives every particle that share of a rest-density lattice's mass (the reference
+  // library's 0.8): the block then starts under-dense and settles to that share of its volume
+  m_latticeMass = Real(m_params.latticeDensity * rho0 / latticeKernelSum(4.0 * r, d));
   // Every mode starts from the same lattice of finest particles, so every mode holds the same water; the
   // modes with coarse particles then merge blocks of it (coarsenInitialLattice).
   std::vector<Eigen::Vector4i> lattice;  // fluid block and lattice coordinates of each particle, by id

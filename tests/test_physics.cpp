@@ -418,3 +418,51 @@ TEST(PhysicsTest, LaminarViscositySmallDiffusesAShearLayerAtItsRate) {
   EXPECT_LT(xsph, 0.5 * laminar);
   EXPECT_GT(limited, 0.0);
 }
+
+TEST(PhysicsTest, UnderDenseLatticeSmallSettlesToRestDensityInItsShareOfTheVolume) {
+  // lattice_density 0.8 (the reference library's particle mass, 0.8 (2r)^3 rho0): the same particles carry
+  // 0.8 of the mass, the block starts under-dense, falls together under gravity and settles at rest density
+  // in 0.8 of its volume, so its water stands 0.8 as high
+  const double r = 0.1 / 10.4;
+  auto settled = [&](double latticeDensity, double& mass, double& height, double& interiorDensity) {
+    SceneDesc scene = tankScene(Vec3d(0.1, 0.15, 0.1), Vec3d(-0.1, 0, -0.1), Vec3d(0.1, 0.2, 0.1), r);
+    scene.params.latticeDensity = latticeDensity;
+    scene.params.initialRelaxation = 0;
+    Simulation sim(scene);
+    while (sim.time() < 1.0)
+      sim.step();
+    const ParticleSet& p = sim.particles();
+    mass = sim.totalMass();
+    // the water's height: its centre of mass above the bottom layer's centres (half the height between the
+    // first and the last layer's centres, so it scales with the layers' spacing)
+    double com = 0.0, bottom = 1e9;
+    for (const Vec3& x : p.x) {
+      com += double(x.y()) / double(p.size());
+      bottom = std::min(bottom, double(x.y()));
+    }
+    height = com - bottom;
+    double rhoSum = 0.0;
+    int count = 0;
+    for (std::size_t i = 0; i < p.size(); ++i)
+      if (p.x[i].y() > 4 * r && p.x[i].y() < com && std::abs(p.x[i].x()) < 0.05 &&
+          std::abs(p.x[i].z()) < 0.05) {
+        rhoSum += double(p.rho[i]);
+        ++count;
+      }
+    interiorDensity = count > 0 ? rhoSum / count / scene.params.restDensity : 0.0;
+    return p.size();
+  };
+  double massFull, heightFull, rhoFull, massReference, heightReference, rhoReference;
+  const std::size_t nFull = settled(1.0, massFull, heightFull, rhoFull);
+  const std::size_t nReference = settled(0.8, massReference, heightReference, rhoReference);
+  std::printf(
+      "lattice density 1.0 / 0.8: %zu / %zu particles, mass %.4f / %.4f kg, water height %.4f / %.4f m "
+      "(ratio %.3f), interior density %.4f / %.4f rho0\n",
+      nFull, nReference, massFull, massReference, heightFull, heightReference, heightReference / heightFull,
+      rhoFull, rhoReference);
+  EXPECT_EQ(nFull, nReference);
+  EXPECT_NEAR(massReference / massFull, 0.8, 1e-6);
+  EXPECT_NEAR(rhoReference, 1.0, 0.01);
+  EXPECT_NEAR(rhoFull, 1.0, 0.01);
+  EXPECT_NEAR(heightReference / heightFull, 0.8, 0.02);
+}
