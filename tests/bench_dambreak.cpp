@@ -537,7 +537,7 @@ void printComparison(std::ostream& out, const std::vector<Row>& rows, double sim
     out << "  note: our particles carry " << latticeDensity
         << " of a rest lattice's mass against the reference's " << kRefLatticeDensity
         << " (lattice_density): " << latticeDensity / kRefLatticeDensity
-        << " times its water, which stands higher and runs faster\n";
+        << " times its water: a different flow, with other steps and neighbour counts\n";
   if (simTime < kDefaultSimTime)
     out << "  note: " << simTime << " s simulated against the reference's " << kDefaultSimTime
         << " s; per-step figures early in the collapse differ from the whole run's\n";
