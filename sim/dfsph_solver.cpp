@@ -56,13 +56,16 @@ Real cohesion(Real r, Real h) {
 }  // namespace
 
 double DfsphSolver::computeDensityAndFactor(SolverContext& ctx, LevelSums* levels) {
-  return levels ? densityAndFactor<true>(ctx, levels) : densityAndFactor<false>(ctx, nullptr);
+  if (ctx.params.viscosity > 0.0)
+    return levels ? densityAndFactor<true, true>(ctx, levels) : densityAndFactor<false, true>(ctx, nullptr);
+  return levels ? densityAndFactor<true, false>(ctx, levels) : densityAndFactor<false, false>(ctx, nullptr);
 }
 
-template <bool kLevelSums>
+template <bool kLevelSums, bool kXsph>
 double DfsphSolver::densityAndFactor(SolverContext& ctx, LevelSums* levels) {
   ParticleSet& p = ctx.fluid;
   const std::size_t n = p.size();
+  m_xsphSize = kXsph ? n : kNoXsph;
   m_factor.resize(n);
   m_rate.resize(n);
   m_full.resize(n);
@@ -91,6 +94,19 @@ double DfsphSolver::densityAndFactor(SolverContext& ctx, LevelSums* levels) {
     levels->rhoBefore.assign(p.rho.begin(), p.rho.end());
     rhoBefore = levels->rhoBefore.data();
   }
+  // XSPH's neighbour sum (see nonPressureForces) from the kernel values of this pass, into fluid.a, with the
+  // pair's volume m_j (1 / rho_i + 1 / rho_j) / 2 at the densities before the pass (which it overwrites;
+  // their inverses are held in the stiffness scratch, free until the divergence solve)
+  [[maybe_unused]] const Real* invRhoPrev = nullptr;
+  [[maybe_unused]] Vec3* xsph = p.a.data();
+  if constexpr (kXsph) {
+    m_k.resize(n);
+    parallelFor(Range(0, n, kGrain), [&](const Range& r) {
+      for (std::size_t i = r.begin(); i < r.end(); ++i)
+        m_k[i] = Real(1) / p.rho[i];
+    });
+    invRhoPrev = m_k.data();
+  }
   // One pass evaluates every pair's kernel for the whole step: density, factor, the density rate the
   // divergence solve starts from, and V_j grad W_ij / (x_i - x_j) cached for the solves' ~12 further passes
   // (positions do not change until the step's end); on the steps that compute the levels, their sums too.
@@ -108,6 +124,8 @@ double DfsphSolver::densityAndFactor(SolverContext& ctx, LevelSums* levels) {
     [[maybe_unused]] Vec3 curl = Vec3::Zero();
     [[maybe_unused]] Real nuSum = 0;
     [[maybe_unused]] Real weightSum = 0;
+    [[maybe_unused]] Vec3 smooth = Vec3::Zero();  // (kXsph)
+    [[maybe_unused]] const Real invRhoI = kXsph ? invRhoPrev[i] : Real(0);
     for (std::uint32_t k = fo[i]; k < fo[i + 1]; ++k) {
       const std::uint32_t j = fi[k];
       neighborMass += m[j];
@@ -121,6 +139,8 @@ double DfsphSolver::densityAndFactor(SolverContext& ctx, LevelSums* levels) {
       const Vec3 gv = vg * xij;
       gradSum += gv;
       rate += gv.dot(vi - v[j]);
+      if constexpr (kXsph)
+        smooth += (m[j] * (invRhoI + invRhoPrev[j]) * w) * (v[j] - vi);
       if constexpr (kLevelSums) {
         const Vec3 vji = v[j] - vi;
         curl += vji.cross(gv);
@@ -151,6 +171,8 @@ double DfsphSolver::densityAndFactor(SolverContext& ctx, LevelSums* levels) {
     }
     p.rho[i] = density * rho0;
     m_rate[i] = rate;
+    if constexpr (kXsph)
+      xsph[i] = Real(0.5) * smooth;
     // the count, with half a neighbour of margin: equal masses give the integer count
     // whatever the rounding of their sum
     const Real boundaryCount = Real(bo[i + 1] - bo[i]);
@@ -361,6 +383,10 @@ void DfsphSolver::nonPressureForces(SolverContext& ctx, Real dtPrevious) {
   // with nu = 0.01 m^2/s needs dt < 1 ms at r = 5 mm and made corner particles jet in the tank at rest).
   const Real invDt = dtPrevious > 0 ? Real(1) / dtPrevious : Real(0);
   const Real cVisc = Real(prm.viscosity) * invDt;
+  // The density pass of this step left XSPH's neighbour sum in fluid.a (unless it ran without XSPH, or a
+  // caller did not run it); otherwise the pair loop below evaluates it, with the densities of now.
+  const bool xsphGiven = cVisc > 0 && m_xsphSize == n;
+  m_xsphSize = kNoXsph;
   const Real cBVisc = Real(prm.boundaryViscosity) * invDt;
   const Real gamma = Real(prm.surfaceTension);
   // Laminar viscosity (Monaghan 1992 / Morris 1997 as SPlisHSPlasH's Viscosity_Standard, which the reference
@@ -419,20 +445,25 @@ void DfsphSolver::nonPressureForces(SolverContext& ctx, Real dtPrevious) {
       }
     });
   }
+  // (the pairs only for what the density pass did not give)
+  const bool pairTerms = (cVisc > 0 && !xsphGiven) || nu10 > 0 || gamma > 0;
+  const Real cPairVisc = xsphGiven ? Real(0) : cVisc;
   m_boundaryForce = deterministicSum(n, Vec3d(Vec3d::Zero()), [&](std::size_t i) -> Vec3d {
     const Vec3 xi = x[i];
     const Vec3 vi = v[i];
     const Real Hi = H[i];
     Vec3 ai = gravity;
-    for (std::uint32_t q = fo[i]; q < fo[i + 1]; ++q) {
+    if (xsphGiven)
+      ai += cVisc * p.a[i];
+    for (std::uint32_t q = fo[i]; pairTerms && q < fo[i + 1]; ++q) {
       const std::uint32_t j = fi[q];
       const Vec3 xij = xi - x[j];
       const Real h = pairSupport(Hi, H[j]);
       const Real r = xij.norm();
       // the pair density is the mean of both, so m_i a_i = -m_j a_j across resolutions
       const Real rhoij = Real(0.5) * (rho[i] + rho[j]);
-      if (cVisc > 0)
-        ai += (cVisc * m[j] / rhoij * CubicSpline::w(r, h)) * (v[j] - vi);
+      if (cPairVisc > 0)
+        ai += (cPairVisc * m[j] / rhoij * CubicSpline::w(r, h)) * (v[j] - vi);
       if (nu10 > 0) {
         // laminar viscosity, limited per pair where the step would make the explicit update overshoot
         const Real c = nu10 * gF[q] * rho0 / rhoij / (r * r + Real(0.01) * h * h);

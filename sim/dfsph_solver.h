@@ -83,7 +83,7 @@ class DfsphSolver {
   void shrinkToFit();
 
  private:
-  template <bool kLevelSums>
+  template <bool kLevelSums, bool kXsph>
   double densityAndFactor(SolverContext& ctx, LevelSums* levels);
   /// rate of change of the normalised density from the current velocities into m_rate [1/s], with the
   /// cached pair gradients; stiffness(i, rate) sets m_k[i] and returns i's error; returns the sum of errors
@@ -97,12 +97,15 @@ class DfsphSolver {
 
   std::vector<Real> m_factor;        // alpha_i [m^2]
   std::vector<Real> m_rate;          // density rate or predicted density (normalised)
-  std::vector<Real> m_k;             // stiffness of the current iteration [m^2/s^2]
+  std::vector<Real> m_k;             // stiffness of the current iteration [m^2/s^2] (in the density pass:
+                                     // 1 / rho_i before it, for XSPH)
   std::vector<std::uint8_t> m_full;  // 1 where the neighbourhood is full by count (divergence warm start)
   std::vector<Vec3> m_normal;        // surface-tension normals [-]
   std::vector<Real> m_gradF;         // V_j grad W_ij / (x_i - x_j) per fluid pair of this step [1/m^2]
   std::vector<Real> m_gradB;         // the same per boundary pair, with the boundary's scaled volume [1/m^2]
   std::vector<Real> m_viscRate;      // laminar viscosity's damping rate D_i of this step [1/s]
+  static constexpr std::size_t kNoXsph = ~std::size_t(0);
+  std::size_t m_xsphSize = kNoXsph;  // particles whose XSPH sum the density pass left in fluid.a
   Vec3d m_boundaryImpulse = Vec3d::Zero();
   Vec3d m_boundaryForce = Vec3d::Zero();
 };
