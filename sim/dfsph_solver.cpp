@@ -96,14 +96,15 @@ double DfsphSolver::densityAndFactor(SolverContext& ctx, LevelSums* levels) {
   }
   // XSPH's neighbour sum (see nonPressureForces) from the kernel values of this pass, into fluid.a, with the
   // pair's volume m_j (1 / rho_i + 1 / rho_j) / 2 at the densities before the pass (which it overwrites;
-  // their inverses are held in the stiffness scratch, free until the divergence solve)
+  // their inverses are held in the stiffness scratch, free until the divergence solve). A density that no
+  // pass gave (a state restored with a density of zero) counts as the rest density.
   [[maybe_unused]] const Real* invRhoPrev = nullptr;
   [[maybe_unused]] Vec3* xsph = p.a.data();
   if constexpr (kXsph) {
     m_k.resize(n);
     parallelFor(Range(0, n, kGrain), [&](const Range& r) {
       for (std::size_t i = r.begin(); i < r.end(); ++i)
-        m_k[i] = Real(1) / p.rho[i];
+        m_k[i] = p.rho[i] > Real(0) ? Real(1) / p.rho[i] : invRho0;
     });
     invRhoPrev = m_k.data();
   }

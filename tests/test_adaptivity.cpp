@@ -1129,6 +1129,37 @@ TEST(SolverTest, XsphFromTheDensityPassIsThePairLoopsSmall) {
   EXPECT_EQ(once.v, fused.v);
 }
 
+TEST(SolverTest, XsphTakesADensityOfZeroAsTheRestDensitySmall) {
+  // XSPH's pair volumes use the inverse densities before the density pass; a density of zero there (a
+  // restored state, never a pass's: a particle's own term is positive) must not turn into infinities: it
+  // counts as the rest density, exactly as if that had been stored.
+  SceneDesc scene =
+      fp::test::tankScene(Vec3d(0.3, 0.2, 0.1), Vec3d(-0.3, 0, -0.1), Vec3d(-0.1, 0.3, 0.1), 0.008);
+  Simulation sim(scene);
+  for (int k = 0; k < 20; ++k)
+    sim.step();
+  sim.prepareNeighbors();
+  ASSERT_TRUE(sim.neighborsValid());
+  ASSERT_GT(scene.params.viscosity, 0.0);
+  ParticleSet zero = sim.particles();
+  ParticleSet rest = sim.particles();
+  for (std::size_t i = 0; i < zero.size(); i += 3) {
+    zero.rho[i] = 0;
+    rest.rho[i] = Real(scene.params.restDensity);
+  }
+  DfsphSolver solverZero, solverRest;
+  SolverContext ctxZero{zero, sim.boundary(), sim.fluidNeighbors(), sim.boundaryNeighbors(), scene.params};
+  SolverContext ctxRest{rest, sim.boundary(), sim.fluidNeighbors(), sim.boundaryNeighbors(), scene.params};
+  solverZero.computeDensityAndFactor(ctxZero);
+  solverRest.computeDensityAndFactor(ctxRest);
+  solverZero.nonPressureForces(ctxZero, Real(0.002));
+  solverRest.nonPressureForces(ctxRest, Real(0.002));
+  for (std::size_t i = 0; i < zero.size(); ++i) {
+    ASSERT_TRUE(zero.a[i].allFinite()) << "particle " << i;
+    ASSERT_EQ(zero.a[i], rest.a[i]) << "particle " << i;
+  }
+}
+
 TEST(AdaptivityTest, MergeLeavesNoSliverOfTheDonorSmall) {
   // A too-light donor whose receivers' rooms add up to its mass only up to round-off: the receivers take all
   // of it and the donor is gone, with mass and momentum kept.
