@@ -447,8 +447,8 @@ void DfsphSolver::nonPressureForces(SolverContext& ctx, Real dtPrevious) {
     });
   }
   // (the pairs only for what the density pass did not give)
-  const bool pairTerms = (cVisc > 0 && !xsphGiven) || nu10 > 0 || gamma > 0;
   const Real cPairVisc = xsphGiven ? Real(0) : cVisc;
+  const bool pairTerms = cPairVisc > 0 || nu10 > 0 || gamma > 0;
   m_boundaryForce = deterministicSum(n, Vec3d(Vec3d::Zero()), [&](std::size_t i) -> Vec3d {
     const Vec3 xi = x[i];
     const Vec3 vi = v[i];

@@ -987,6 +987,23 @@ TEST(LevelsTest, PhiStaysTheExactSurfaceDistanceStepAfterStepSmall) {
   EXPECT_LT(worst, 0.2 * r) << "largest |phi - exact distance| in fine radii: " << worst / r;
 }
 
+namespace {
+
+/// The collapsing water column the solver and levels tests below share (a 0.2 x 0.3 x 0.2 m block at the end
+/// of a 0.6 m tank, r = 8 mm), run in `mode` until `time`, with the neighbour lists of its current positions
+std::unique_ptr<Simulation> collapsingColumn(AdaptivityMode mode, double time) {
+  SceneDesc scene =
+      fp::test::tankScene(Vec3d(0.3, 0.2, 0.1), Vec3d(-0.3, 0, -0.1), Vec3d(-0.1, 0.3, 0.1), 0.008);
+  scene.mode = mode;
+  auto sim = std::make_unique<Simulation>(scene);
+  while (sim->time() < time)
+    sim->step();
+  sim->prepareNeighbors();
+  return sim;
+}
+
+}  // namespace
+
 TEST(LevelsTest, TheDensityPassSumsGiveTheLevelsOfTheirOwnPassSmall) {
   // On the steps that compute the levels the solver's density pass also gathers the raw vorticity and
   // velocity difference (LevelSums), so the levels evaluate no kernel of their own. On a moving adaptive
@@ -994,13 +1011,9 @@ TEST(LevelsTest, TheDensityPassSumsGiveTheLevelsOfTheirOwnPassSmall) {
   // with and without the sums, and the levels from the sums those of the levels' own pass: the same surface,
   // omega to round-off, nu and the targets to the difference of the neighbours' volumes (m_j / rho_j at the
   // density before the pass against after it).
-  SceneDesc scene =
-      fp::test::tankScene(Vec3d(0.3, 0.2, 0.1), Vec3d(-0.3, 0, -0.1), Vec3d(-0.1, 0.3, 0.1), 0.008);
-  scene.mode = AdaptivityMode::FluidPlaying;
-  Simulation sim(scene);
-  while (sim.time() < 0.15)
-    sim.step();
-  sim.prepareNeighbors();
+  const std::unique_ptr<Simulation> column = collapsingColumn(AdaptivityMode::FluidPlaying, 0.15);
+  const Simulation& sim = *column;
+  const SceneDesc& scene = sim.scene();
   ASSERT_TRUE(sim.neighborsValid());
   ParticleSet own = sim.particles();
   ParticleSet fused = sim.particles();
@@ -1070,13 +1083,9 @@ TEST(SolverTest, XsphFromTheDensityPassIsThePairLoopsSmall) {
   // non-pressure forces evaluate it in their pair loop, with m_j / rho_ij. On a moving adaptive state (mixed
   // masses and supports) whose densities are those of now, both give the same accelerations to the
   // difference of the two pair volumes, and the fused sum keeps momentum to round-off.
-  SceneDesc scene =
-      fp::test::tankScene(Vec3d(0.3, 0.2, 0.1), Vec3d(-0.3, 0, -0.1), Vec3d(-0.1, 0.3, 0.1), 0.008);
-  scene.mode = AdaptivityMode::FluidPlaying;
-  Simulation sim(scene);
-  while (sim.time() < 0.15)
-    sim.step();
-  sim.prepareNeighbors();
+  const std::unique_ptr<Simulation> column = collapsingColumn(AdaptivityMode::FluidPlaying, 0.15);
+  const Simulation& sim = *column;
+  const SceneDesc& scene = sim.scene();
   ASSERT_TRUE(sim.neighborsValid());
   SimParams withXsph = scene.params;
   withXsph.viscosity = 0.05;
@@ -1133,12 +1142,9 @@ TEST(SolverTest, XsphTakesADensityOfZeroAsTheRestDensitySmall) {
   // XSPH's pair volumes use the inverse densities before the density pass; a density of zero there (a
   // restored state, never a pass's: a particle's own term is positive) must not turn into infinities: it
   // counts as the rest density, exactly as if that had been stored.
-  SceneDesc scene =
-      fp::test::tankScene(Vec3d(0.3, 0.2, 0.1), Vec3d(-0.3, 0, -0.1), Vec3d(-0.1, 0.3, 0.1), 0.008);
-  Simulation sim(scene);
-  for (int k = 0; k < 20; ++k)
-    sim.step();
-  sim.prepareNeighbors();
+  const std::unique_ptr<Simulation> column = collapsingColumn(AdaptivityMode::UniformHigh, 0.05);
+  const Simulation& sim = *column;
+  const SceneDesc& scene = sim.scene();
   ASSERT_TRUE(sim.neighborsValid());
   ASSERT_GT(scene.params.viscosity, 0.0);
   ParticleSet zero = sim.particles();
