@@ -427,12 +427,16 @@ void DfsphSolver::nonPressureForces(SolverContext& ctx, Real dtPrevious) {
   // below one (D_i is about 8.5 * 10 nu / H^2 in a full neighbourhood: 485 1/s at r = 10.5 mm, 2,100 1/s at
   // r = 5 mm). Each pair is scaled by min(1, 1 / (dt max(D_i, D_j))): symmetric, so momentum stays exact, and
   // inactive at the small steps of a fast flow. dt is the previous step, the one the CFL step starts from.
-  const Real* rate = m_viscRate.data();
+  // m_viscRate holds 1 / D_i, so that a pair's limit min(1, 1 / (dt max(D_i, D_j))) costs no division; both
+  // pair loops divide once a pair (2 nu10 rho0 gF_ij / ((rho_i + rho_j) (|x_ij|^2 + 0.01 H^2)) is c_ij, with
+  // rho0 / rho_ij = 2 rho0 / (rho_i + rho_j)).
+  const Real* invRate = m_viscRate.data();
   Real laminarLimit = 0;
+  const Real laminarScale = Real(2) * nu10 * rho0;
   if (nu10 > 0) {
     m_viscRate.resize(n);
     laminarLimit = Real(1) / Real(dtPrevious > 0 ? dtPrevious : prm.dtMax);
-    rate = m_viscRate.data();
+    invRate = m_viscRate.data();
     parallelFor(Range(0, n, kGrain), [&](const Range& r) {
       for (std::size_t i = r.begin(); i < r.end(); ++i) {
         Real d = 0;
@@ -440,9 +444,9 @@ void DfsphSolver::nonPressureForces(SolverContext& ctx, Real dtPrevious) {
           const std::uint32_t j = fi[q];
           const Real r2 = (x[i] - x[j]).squaredNorm();
           const Real h = pairSupport(H[i], H[j]);
-          d -= nu10 * gF[q] * rho0 / (Real(0.5) * (rho[i] + rho[j])) * r2 / (r2 + Real(0.01) * h * h);
+          d -= gF[q] * r2 / ((rho[i] + rho[j]) * (r2 + Real(0.01) * h * h));
         }
-        m_viscRate[i] = std::max(d, kEps);
+        m_viscRate[i] = Real(1) / std::max(laminarScale * d, kEps);
       }
     });
   }
@@ -460,15 +464,16 @@ void DfsphSolver::nonPressureForces(SolverContext& ctx, Real dtPrevious) {
       const std::uint32_t j = fi[q];
       const Vec3 xij = xi - x[j];
       const Real h = pairSupport(Hi, H[j]);
-      const Real r = xij.norm();
+      const Real r2 = xij.squaredNorm();
+      const Real r = cPairVisc > 0 || gamma > 0 ? std::sqrt(r2) : Real(0);
       // the pair density is the mean of both, so m_i a_i = -m_j a_j across resolutions
       const Real rhoij = Real(0.5) * (rho[i] + rho[j]);
       if (cPairVisc > 0)
         ai += (cPairVisc * m[j] / rhoij * CubicSpline::w(r, h)) * (v[j] - vi);
       if (nu10 > 0) {
         // laminar viscosity, limited per pair where the step would make the explicit update overshoot
-        const Real c = nu10 * gF[q] * rho0 / rhoij / (r * r + Real(0.01) * h * h);
-        const Real limit = std::min(Real(1), laminarLimit / std::max(rate[i], rate[j]));
+        const Real c = laminarScale * gF[q] / ((rho[i] + rho[j]) * (r2 + Real(0.01) * h * h));
+        const Real limit = std::min(Real(1), laminarLimit * std::min(invRate[i], invRate[j]));
         ai += (limit * c * (vi - v[j]).dot(xij)) * xij;
       }
       if (gamma > 0) {
