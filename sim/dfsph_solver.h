@@ -77,6 +77,8 @@ class DfsphSolver {
   const Vec3d& boundaryForce() const { return m_boundaryForce; }
   /// sets the accumulated boundary impulse to zero
   void resetBoundaryImpulse() { m_boundaryImpulse.setZero(); }
+  /// the DFSPH factors alpha_i of the last density pass [m^2] (0 where its denominator vanishes)
+  const std::vector<Real>& factors() const { return m_factor; }
   /// bytes held by scratch arrays
   std::size_t memoryBytes() const;
   /// releases scratch capacity beyond the current particle and pair counts

@@ -1166,6 +1166,58 @@ TEST(SolverTest, XsphTakesADensityOfZeroAsTheRestDensitySmall) {
   }
 }
 
+TEST(SolverTest, TheFactorPairsEachNeighbourWithBothVolumesSmall) {
+  // DFSPH's factor on particles of unequal masses: alpha_i = 1 / (|sum_j V_j grad W_ij + sum_b V_b grad
+  // W_ib|^2 + sum_j V_i V_j |grad W_ij|^2). k_i moves a neighbour j by V_i grad W_ij (the pair update is
+  // symmetric), so the pair's term is V_i V_j; with it a particle's own stiffness cancels its own density
+  // rate when it acts alone. Recomputed here in double precision from that definition for every particle of a
+  // jittered block of masses 0.6-4 times the fine mass next to walls; the form with V_j^2 (the uniform
+  // formula's) must come out distinguishably different, or the test would not see it return.
+  Neighbourhood nb(31);
+  SolverContext ctx{nb.p, nb.boundary, nb.fluidNbrs, nb.boundaryNbrs, nb.params};
+  DfsphSolver solver;
+  solver.computeDensityAndFactor(ctx);
+  const ParticleSet& p = nb.p;
+  const double invRho0 = 1.0 / nb.params.restDensity;
+  const Real Hb = nb.boundary.support();
+  double worst = 0.0;
+  double largestOtherForm = 0.0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const double Vi = double(p.m[i]) * invRho0;
+    Vec3d gradSum = Vec3d::Zero();
+    double pairs = 0.0;
+    double pairsOtherForm = 0.0;
+    for (std::uint32_t k = nb.fluidNbrs.offsets[i]; k < nb.fluidNbrs.offsets[i + 1]; ++k) {
+      const std::uint32_t j = nb.fluidNbrs.indices[k];
+      const Vec3 xij = p.x[i] - p.x[j];
+      const Vec3d grad =
+          double(CubicSpline::gradFactor(xij.norm(), pairSupport(p.H[i], p.H[j]))) * xij.cast<double>();
+      const double Vj = double(p.m[j]) * invRho0;
+      gradSum += Vj * grad;
+      pairs += Vi * Vj * grad.squaredNorm();
+      pairsOtherForm += Vj * Vj * grad.squaredNorm();
+    }
+    const double sb = double(nb.boundary.volumeScale(p.H[i]));
+    for (std::uint32_t k = nb.boundaryNbrs.offsets[i]; k < nb.boundaryNbrs.offsets[i + 1]; ++k) {
+      const std::uint32_t b = nb.boundaryNbrs.indices[k];
+      const Vec3 xib = p.x[i] - nb.boundary.x[b];
+      gradSum += sb * double(nb.boundary.psi[b]) *
+                 double(CubicSpline::gradFactor(xib.norm(), pairSupport(p.H[i], Hb))) * xib.cast<double>();
+    }
+    const double expected = 1.0 / (gradSum.squaredNorm() + pairs);
+    const double otherForm = 1.0 / (gradSum.squaredNorm() + pairsOtherForm);
+    ASSERT_GT(double(solver.factors()[i]), 0.0) << "particle " << i;
+    worst = std::max(worst, std::abs(double(solver.factors()[i]) / expected - 1.0));
+    largestOtherForm = std::max(largestOtherForm, std::abs(otherForm / expected - 1.0));
+  }
+  std::printf(
+      "DFSPH factor of %zu particles of unequal masses: largest relative difference %.2g from the "
+      "definition (the V_j^2 form differs by up to %.2g)\n",
+      p.size(), worst, largestOtherForm);
+  EXPECT_LT(worst, 1e-5);
+  EXPECT_GT(largestOtherForm, 0.1);
+}
+
 TEST(AdaptivityTest, MergeLeavesNoSliverOfTheDonorSmall) {
   // A too-light donor whose receivers' rooms add up to its mass only up to round-off: the receivers take all
   // of it and the donor is gone, with mass and momentum kept.
