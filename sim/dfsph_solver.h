@@ -105,7 +105,7 @@ class DfsphSolver {
   std::vector<Vec3> m_normal;        // surface-tension normals [-]
   std::vector<Real> m_gradF;         // V_j grad W_ij / (x_i - x_j) per fluid pair of this step [1/m^2]
   std::vector<Real> m_gradB;         // the same per boundary pair, with the boundary's scaled volume [1/m^2]
-  std::vector<Real> m_viscRate;      // laminar viscosity's damping rate D_i of this step [1/s]
+  std::vector<Real> m_viscRate;      // 1 / D_i of the laminar viscosity's damping rates [s]
   static constexpr std::size_t kNoXsph = ~std::size_t(0);
   std::size_t m_xsphSize = kNoXsph;  // particles whose XSPH sum the density pass left in fluid.a
   Vec3d m_boundaryImpulse = Vec3d::Zero();
