@@ -427,9 +427,8 @@ void DfsphSolver::nonPressureForces(SolverContext& ctx, Real dtPrevious) {
   // below one (D_i is about 8.5 * 10 nu / H^2 in a full neighbourhood: 485 1/s at r = 10.5 mm, 2,100 1/s at
   // r = 5 mm). Each pair is scaled by min(1, 1 / (dt max(D_i, D_j))): symmetric, so momentum stays exact, and
   // inactive at the small steps of a fast flow. dt is the previous step, the one the CFL step starts from.
-  // m_viscRate holds 1 / D_i, so that a pair's limit min(1, 1 / (dt max(D_i, D_j))) costs no division; both
-  // pair loops divide once a pair (2 nu10 rho0 gF_ij / ((rho_i + rho_j) (|x_ij|^2 + 0.01 H^2)) is c_ij, with
-  // rho0 / rho_ij = 2 rho0 / (rho_i + rho_j)).
+  // m_viscRate holds 1 / D_i, so the limit costs no division a pair, and both pair loops divide once a pair:
+  // c_ij = 2 nu10 rho0 gF_ij / ((rho_i + rho_j) (|x_ij|^2 + 0.01 H^2)).
   const Real* invRate = m_viscRate.data();
   Real laminarLimit = 0;
   const Real laminarScale = Real(2) * nu10 * rho0;
@@ -453,6 +452,7 @@ void DfsphSolver::nonPressureForces(SolverContext& ctx, Real dtPrevious) {
   // (the pairs only for what the density pass did not give)
   const Real cPairVisc = xsphGiven ? Real(0) : cVisc;
   const bool pairTerms = cPairVisc > 0 || nu10 > 0 || gamma > 0;
+  const bool pairDistance = cPairVisc > 0 || gamma > 0;  // (the laminar term needs only its square)
   m_boundaryForce = deterministicSum(n, Vec3d(Vec3d::Zero()), [&](std::size_t i) -> Vec3d {
     const Vec3 xi = x[i];
     const Vec3 vi = v[i];
@@ -465,7 +465,7 @@ void DfsphSolver::nonPressureForces(SolverContext& ctx, Real dtPrevious) {
       const Vec3 xij = xi - x[j];
       const Real h = pairSupport(Hi, H[j]);
       const Real r2 = xij.squaredNorm();
-      const Real r = cPairVisc > 0 || gamma > 0 ? std::sqrt(r2) : Real(0);
+      const Real r = pairDistance ? std::sqrt(r2) : Real(0);
       // the pair density is the mean of both, so m_i a_i = -m_j a_j across resolutions
       const Real rhoij = Real(0.5) * (rho[i] + rho[j]);
       if (cPairVisc > 0)

@@ -1189,9 +1189,7 @@ TEST(SolverTest, TheFactorPairsEachNeighbourWithBothVolumesSmall) {
     double pairsOtherForm = 0.0;
     for (std::uint32_t k = nb.fluidNbrs.offsets[i]; k < nb.fluidNbrs.offsets[i + 1]; ++k) {
       const std::uint32_t j = nb.fluidNbrs.indices[k];
-      const Vec3 xij = p.x[i] - p.x[j];
-      const Vec3d grad =
-          double(CubicSpline::gradFactor(xij.norm(), pairSupport(p.H[i], p.H[j]))) * xij.cast<double>();
+      const Vec3d grad = CubicSpline::grad(p.x[i] - p.x[j], pairSupport(p.H[i], p.H[j])).cast<double>();
       const double Vj = double(p.m[j]) * invRho0;
       gradSum += Vj * grad;
       pairs += Vi * Vj * grad.squaredNorm();
@@ -1200,9 +1198,8 @@ TEST(SolverTest, TheFactorPairsEachNeighbourWithBothVolumesSmall) {
     const double sb = double(nb.boundary.volumeScale(p.H[i]));
     for (std::uint32_t k = nb.boundaryNbrs.offsets[i]; k < nb.boundaryNbrs.offsets[i + 1]; ++k) {
       const std::uint32_t b = nb.boundaryNbrs.indices[k];
-      const Vec3 xib = p.x[i] - nb.boundary.x[b];
       gradSum += sb * double(nb.boundary.psi[b]) *
-                 double(CubicSpline::gradFactor(xib.norm(), pairSupport(p.H[i], Hb))) * xib.cast<double>();
+                 CubicSpline::grad(p.x[i] - nb.boundary.x[b], pairSupport(p.H[i], Hb)).cast<double>();
     }
     const double expected = 1.0 / (gradSum.squaredNorm() + pairs);
     const double otherForm = 1.0 / (gradSum.squaredNorm() + pairsOtherForm);
