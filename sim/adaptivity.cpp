@@ -132,7 +132,7 @@ class SplitErrorTerms {
     m_columns.assign(6 * m_padded, Real(0));
     std::fill_n(column(kReach2), m_padded, Real(-1));
     for (std::uint32_t k = f0; k < f1; ++k) {
-      const std::uint32_t j = ctx.fluidNbrs.indices[k];
+      const std::uint32_t j = ctx.fluidNbrs.neighbor(o, k);
       const std::size_t c = k - f0;
       Fluid& f = m_fluid[c];
       f.x = p.x[j];
@@ -643,7 +643,7 @@ double Adaptivity::capacityBound(const AdaptContext& ctx, std::size_t donor, boo
   for (std::uint32_t k = ctx.fluidNbrs.offsets[donor]; k < ctx.fluidNbrs.offsets[donor + 1]; ++k) {
     Real distance;
     double room;
-    if (receiverRoom(p, donor, ctx.fluidNbrs.indices[k], below, rate, distance, room, kReach))
+    if (receiverRoom(p, donor, ctx.fluidNbrs.neighbor(donor, k), below, rate, distance, room, kReach))
       bound += std::max(0.0, room);
   }
   return bound;
@@ -656,7 +656,7 @@ bool Adaptivity::transferMass(const AdaptContext& ctx, std::size_t donor, double
   const double rate = receiverRate(ctx.params);
   const Real below = receiverBelow(ctx.params, all);
   for (std::uint32_t k = ctx.fluidNbrs.offsets[donor]; k < ctx.fluidNbrs.offsets[donor + 1]; ++k) {
-    const std::uint32_t j = ctx.fluidNbrs.indices[k];
+    const std::uint32_t j = ctx.fluidNbrs.neighbor(donor, k);
     if (m_locked[j] || m_removed[j])
       continue;
     Real distance;
@@ -979,7 +979,7 @@ void Adaptivity::blendSplitDensities(ParticleSet& p, const NeighborList& fluidNb
         mass += double(p.m[s]);
         centre += double(p.m[s]) * p.x[s].cast<double>();
         for (std::uint32_t q = fluidNbrs.offsets[s]; q < fluidNbrs.offsets[s + 1]; ++q)
-          fluid.push_back(fluidNbrs.indices[q]);
+          fluid.push_back(fluidNbrs.neighbor(s, q));
         for (std::uint32_t q = boundaryNbrs.offsets[s]; q < boundaryNbrs.offsets[s + 1]; ++q)
           walls.push_back(boundaryNbrs.indices[q]);
       }

@@ -97,7 +97,7 @@ bool isSurface(const ParticleSet& p, std::size_t i, Vec3 away, Real volume, cons
     return d.dot(dir) >= (kConeCos * c - kConeSin * s) * dist;
   };
   for (std::uint32_t k = fluidNbrs.offsets[i]; k < fluidNbrs.offsets[i + 1]; ++k) {
-    if (inWidenedCone(fluidNbrs.indices[k]))
+    if (inWidenedCone(fluidNbrs.neighbor(i, k)))
       return false;
   }
   for (std::uint32_t k = boundaryNbrs.offsets[i]; k < boundaryNbrs.offsets[i + 1]; ++k) {
@@ -128,7 +128,7 @@ void detectSurface(ParticleSet& p, const NeighborList& fluidNbrs, const Neighbor
       Vec3 away = Vec3::Zero();
       Real volume = 0;
       for (std::uint32_t k = fluidNbrs.offsets[i]; k < fluidNbrs.offsets[i + 1]; ++k) {
-        const std::uint32_t j = fluidNbrs.indices[k];
+        const std::uint32_t j = fluidNbrs.neighbor(i, k);
         const Vec3 d = xi - p.x[j];
         const Real len = d.norm();
         const Real vj = p.m[j] / p.rho[j];
@@ -158,7 +158,7 @@ void LevelEstimator::surfaceAndRawDynamics(ParticleSet& p, const NeighborList& f
       Real num = 0;
       Real den = p.m[i] / p.rho[i] * CubicSpline::w0(p.H[i]);
       for (std::uint32_t k = fluidNbrs.offsets[i]; k < fluidNbrs.offsets[i + 1]; ++k) {
-        const std::uint32_t j = fluidNbrs.indices[k];
+        const std::uint32_t j = fluidNbrs.neighbor(i, k);
         const Vec3 xij = xi - p.x[j];
         const Real len = xij.norm();
         const Real vj = p.m[j] / p.rho[j];
@@ -213,7 +213,7 @@ Real LevelEstimator::distanceAt(const ParticleSet& p, std::size_t i, const Neigh
     return 0;
   Real best = cap;
   for (std::uint32_t k = fluidNbrs.offsets[i]; k < fluidNbrs.offsets[i + 1]; ++k) {
-    const std::uint32_t j = fluidNbrs.indices[k];
+    const std::uint32_t j = fluidNbrs.neighbor(i, k);
     if (p.phi[j] >= best)
       continue;  // cannot improve
     best = std::min(best, p.phi[j] + (p.x[i] - p.x[j]).norm());
@@ -251,7 +251,7 @@ void LevelEstimator::smoothDynamicsAt(ParticleSet& p, std::size_t i, const Neigh
   Real nu = self * rawNu[i];
   Real den = self;
   for (std::uint32_t k = fluidNbrs.offsets[i]; k < fluidNbrs.offsets[i + 1]; ++k) {
-    const std::uint32_t j = fluidNbrs.indices[k];
+    const std::uint32_t j = fluidNbrs.neighbor(i, k);
     const Real w = p.m[j] / p.rho[j] * CubicSpline::w((p.x[i] - p.x[j]).norm(), pairSupport(p.H[i], p.H[j]));
     omega += w * rawOmega[j];
     nu += w * rawNu[j];

@@ -72,14 +72,25 @@ struct CandidateTest {
   std::uint32_t offset;
 };
 
-/// Scalar test of candidates [b, e): writes j + offset of every candidate at o[kept] and keeps it by
+/// An entry of type T (a list's index, or its 16-bit offset from the row) from j + offset computed modulo
+/// 2^32: the offset of a narrow list is its source's index offset minus the row, and the difference, which
+/// the caller checked to fit, is its low 16 bits.
+template <class T>
+inline T entry(std::uint32_t value) {
+  if constexpr (std::is_same_v<T, std::uint32_t>)
+    return value;
+  else
+    return T(std::uint16_t(value));
+}
+
+/// Scalar test of candidates [b, e): writes entry(j + offset) of every candidate at o[kept] and keeps it by
 /// advancing `kept` (room for e - b entries at o). Returns the number kept.
-template <bool kSized>
+template <bool kSized, class T>
 inline std::size_t testCandidates(const CandidateTest& t, const Vec3* sx, const Real* sH, std::uint32_t b,
-                                  std::uint32_t e, std::uint32_t* o) {
+                                  std::uint32_t e, T* o) {
   std::size_t kept = 0;
   for (std::uint32_t j = b; j < e; ++j) {
-    o[kept] = j + t.offset;
+    o[kept] = entry<T>(j + t.offset);
     if constexpr (kSized) {
       const Real h = Real(0.5) * (t.Hi + sH[j]);
       kept += std::size_t((j != t.skip) & (distance2(t.xi, sx[j]) < h * h) & (sH[j] <= t.hCap));
@@ -128,11 +139,10 @@ constexpr CompressTable kCompress;
 /// are identical), the query's constants set up once for all its runs. Reads the positions (and supports) of
 /// 8 points from each block's first: a block that would read past `limit` (the number of points of the
 /// source) goes through the scalar test. Writes 8 entries at o[kept] per block: room for the runs' candidates
-/// + 7 entries at o.
-template <bool kSized>
+/// + 7 entries at o. 16-bit entries are packed with signed saturation: exact, since they fit.
+template <bool kSized, class T>
 FP_AVX2_TARGET std::size_t testRunsAvx2(const CandidateTest& t, const Vec3* sx, const Real* sH,
-                                        const Run* runs, std::size_t nRuns, std::uint32_t limit,
-                                        std::uint32_t* o) {
+                                        const Run* runs, std::size_t nRuns, std::uint32_t limit, T* o) {
   const __m256 qx = _mm256_set1_ps(t.xi.x());
   const __m256 qy = _mm256_set1_ps(t.xi.y());
   const __m256 qz = _mm256_set1_ps(t.xi.z());
@@ -183,8 +193,13 @@ FP_AVX2_TARGET std::size_t testRunsAvx2(const CandidateTest& t, const Vec3* sx, 
       const int mask = _mm256_movemask_ps(_mm256_andnot_ps(_mm256_castsi256_ps(out), keep));
       const __m256i perm =
           _mm256_cvtepu8_epi32(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(&kCompress.lanes[mask])));
-      _mm256_storeu_si256(reinterpret_cast<__m256i*>(o + kept),
-                          _mm256_permutevar8x32_epi32(_mm256_add_epi32(index, offset), perm));
+      const __m256i entries = _mm256_permutevar8x32_epi32(_mm256_add_epi32(index, offset), perm);
+      if constexpr (std::is_same_v<T, std::uint32_t>)
+        _mm256_storeu_si256(reinterpret_cast<__m256i*>(o + kept), entries);
+      else
+        _mm_storeu_si128(
+            reinterpret_cast<__m128i*>(o + kept),
+            _mm_packs_epi32(_mm256_castsi256_si128(entries), _mm256_extracti128_si256(entries, 1)));
       kept += std::size_t(__builtin_popcount(unsigned(mask)));
     }
     if (j < e)
@@ -444,6 +459,33 @@ inline Real slabDistance(Real p, Real lo, Real cell, Real margin) {
   return d > Real(0) ? d : Real(0);
 }
 
+/// The entries of `list` in the form T: its indices (wide) or its offsets from the row (narrow).
+template <class T>
+std::vector<T>& entriesOf(NeighborList& list) {
+  if constexpr (std::is_same_v<T, std::int16_t>)
+    return list.deltas;
+  else
+    return list.indices;
+}
+
+/// The neighbour of row i that entry e of a list in the form T holds.
+template <class T>
+inline std::uint32_t neighborOf(std::size_t i, T e) {
+  if constexpr (std::is_same_v<T, std::int16_t>)
+    return std::uint32_t(std::int32_t(i) + std::int32_t(e));
+  else
+    return e;
+}
+
+/// The entry of row i that holds neighbour j, in the form T.
+template <class T>
+inline T entryFor(std::size_t i, std::uint32_t j) {
+  if constexpr (std::is_same_v<T, std::int16_t>)
+    return T(std::int32_t(j) - std::int32_t(i));
+  else
+    return j;
+}
+
 /// floor(f) for the cell bounds of a row; anything below zero (NaN included) gives -1, which the caller
 /// clamps like any cell left of the grid (std::floor is a library call on baseline x86-64)
 inline int floorCell(Real f) {
@@ -452,9 +494,13 @@ inline int floorCell(Real f) {
 
 }  // namespace
 
-void NeighborSearch::buildLists(const UniformGrid& grid, const std::vector<Vec3>& qx,
+template <class T>
+bool NeighborSearch::buildLists(const UniformGrid& grid, const std::vector<Vec3>& qx,
                                 const std::vector<Real>& qH, const std::vector<GridPoints>& sources,
                                 int selfSource, Real maxH, NeighborList& out, bool ownSupport) {
+  // narrow lists: offsets from the row, for lists of the query points among themselves
+  constexpr bool kNarrow = std::is_same_v<T, std::int16_t>;
+  std::vector<T>& store = entriesOf<T>(out);
   const std::size_t n = qx.size();
   const std::size_t nChunks = (n + kChunk - 1) / kChunk;
   const Eigen::Vector3i dims = grid.dims();
@@ -472,6 +518,8 @@ void NeighborSearch::buildLists(const UniformGrid& grid, const std::vector<Vec3>
   out.chunkCounts.resize(nChunks, kUnseenChunk);
   std::vector<std::size_t> roomStart(nChunks + 1, 0);
   std::vector<std::uint8_t> overflowed(nChunks, 0);
+  // (narrow lists) chunks with an offset that does not fit 16 bits
+  std::vector<std::uint8_t> tooFar(kNarrow ? nChunks : 0, 0);
   std::vector<std::vector<std::uint32_t>> spills(nChunks);
   // The largest support in each cell of every source with per-point supports (0 where empty): a fine
   // particle then skips the cells of the coarsest reach that hold only fine particles. The lists come out
@@ -493,7 +541,7 @@ void NeighborSearch::buildLists(const UniformGrid& grid, const std::vector<Vec3>
   }
   auto searchChunk = [&](std::size_t chunk) {
     const std::size_t room = roomStart[chunk + 1] - roomStart[chunk];
-    std::uint32_t* dst = out.indices.data() + roomStart[chunk];
+    T* dst = store.data() + roomStart[chunk];
     std::size_t count = 0;
     std::vector<std::uint32_t>* spill = nullptr;
     auto emit = [&](std::uint32_t j) {
@@ -523,7 +571,8 @@ void NeighborSearch::buildLists(const UniformGrid& grid, const std::vector<Vec3>
         const CellRanges ranges(*src.cellStart);
         const std::uint32_t skip =
             s == selfSource ? std::uint32_t(i) : std::numeric_limits<std::uint32_t>::max();
-        const std::uint32_t offset = src.indexOffset;
+        // (narrow lists: minus the row, whose offsets are written)
+        const std::uint32_t offset = src.indexOffset - (kNarrow ? std::uint32_t(i) : std::uint32_t(0));
         // the largest pair support this particle can have with this source (with its own support only:
         // H_i, since then H_j <= H_i)
         const Real hMax = ownSupport && src.H ? std::min(Hi, Real(0.5) * (Hi + maxH))
@@ -601,8 +650,14 @@ void NeighborSearch::buildLists(const UniformGrid& grid, const std::vector<Vec3>
             nRuns += std::size_t(length != 0);
           }
         }
-        // the candidates of all rows, in row order
+        // the candidates of all rows, in row order (ascending: the first run starts at the least, the last
+        // ends at the largest)
         const Real* sH = src.H;
+        if constexpr (kNarrow) {
+          if (nRuns > 0 && (std::int64_t(i) - std::int64_t(runs[0].b) > 32768 ||
+                            std::int64_t(runs[nRuns - 1].e) - 1 - std::int64_t(i) > 32767))
+            tooFar[chunk] = 1;
+        }
 #ifdef FP_NEIGHBOR_AVX2
         if (simd && count + candidates + 7 <= room) {
           count += sH ? testRunsAvx2<true>(test, sx, sH, runs.data(), nRuns, sourceCount[std::size_t(s)],
@@ -645,9 +700,9 @@ void NeighborSearch::buildLists(const UniformGrid& grid, const std::vector<Vec3>
     roomStart[chunk + 1] = roomStart[chunk] + room;
   }
   const std::size_t total = roomStart[nChunks];
-  if (out.indices.capacity() < total)
-    out.indices.reserve(withSlack(total));
-  out.indices.resize(total);
+  if (store.capacity() < total)
+    store.reserve(withSlack(total));
+  store.resize(total);
   parallelFor(tbb::blocked_range<std::size_t>(0, nChunks, 1), [&](const tbb::blocked_range<std::size_t>& cr) {
     for (std::size_t chunk = cr.begin(); chunk < cr.end(); ++chunk)
       searchChunk(chunk);
@@ -667,20 +722,20 @@ void NeighborSearch::buildLists(const UniformGrid& grid, const std::vector<Vec3>
   const std::size_t needed = listStart[nChunks];
   // the rooms the next build will ask for, at most
   const std::size_t nextRooms = roomsFor(needed, nChunks);
-  if (needed > out.indices.size()) {
+  if (needed > store.size()) {
     // (room for the next build's rooms too, not the doubling a resize past the capacity would make)
-    if (needed > out.indices.capacity())
-      out.indices.reserve(withSlack(nextRooms));
-    out.indices.resize(needed);
+    if (needed > store.capacity())
+      store.reserve(withSlack(nextRooms));
+    store.resize(needed);
   }
-  std::uint32_t* lists = out.indices.data();
+  T* lists = store.data();
   auto moveChunk = [&](std::size_t chunk) {
     const std::size_t room = roomStart[chunk + 1] - roomStart[chunk];
     const std::size_t inRoom = std::min<std::size_t>(room, out.chunkCounts[chunk]);
     if (listStart[chunk] != roomStart[chunk] && inRoom > 0)
-      std::memmove(lists + listStart[chunk], lists + roomStart[chunk], inRoom * sizeof(std::uint32_t));
+      std::memmove(lists + listStart[chunk], lists + roomStart[chunk], inRoom * sizeof(T));
     if (overflowed[chunk])
-      std::copy(spills[chunk].begin(), spills[chunk].end(), lists + listStart[chunk] + inRoom);
+      std::transform(spills[chunk].begin(), spills[chunk].end(), lists + listStart[chunk] + inRoom, entry<T>);
   };
   for (std::size_t chunk = nChunks; chunk-- > 0;) {
     if (listStart[chunk] > roomStart[chunk])
@@ -690,16 +745,16 @@ void NeighborSearch::buildLists(const UniformGrid& grid, const std::vector<Vec3>
     if (listStart[chunk] <= roomStart[chunk])
       moveChunk(chunk);
   }
-  out.indices.resize(needed);
+  store.resize(needed);
   // The first build's rooms are a guess (32 a query point, where walls give a handful), and lists shrink when
   // coarse particles replace fine ones: capacity beyond what the next build's rooms need is released (the
   // dam break's wall lists held 130 bytes a particle of it).
   // (Not for buildSymmetric's own lists: it sizes the array for the whole lists.)
-  if (!ownSupport && out.indices.capacity() > nextRooms + nextRooms / 8) {
-    std::vector<std::uint32_t> fitted;
+  if (!ownSupport && store.capacity() > nextRooms + nextRooms / 8) {
+    std::vector<T> fitted;
     fitted.reserve(withSlack(nextRooms));
-    fitted.assign(out.indices.begin(), out.indices.end());
-    out.indices.swap(fitted);
+    fitted.assign(store.begin(), store.end());
+    store.swap(fitted);
   }
   parallelFor(tbb::blocked_range<std::size_t>(0, nChunks, kLightChunks),
               [&](const tbb::blocked_range<std::size_t>& cr) {
@@ -710,22 +765,66 @@ void NeighborSearch::buildLists(const UniformGrid& grid, const std::vector<Vec3>
                     out.offsets[i + 1] += base;
                 }
               });
+  if constexpr (kNarrow)
+    return std::find(tooFar.begin(), tooFar.end(), std::uint8_t(1)) == tooFar.end();
+  return true;
+}
+
+/// Releases the entries of the form a build did not write, and marks the form it did.
+template <class T>
+void settleForm(NeighborList& out) {
+  out.narrow = std::is_same_v<T, std::int16_t>;
+  if (out.narrow) {
+    out.indices.clear();
+    out.indices.shrink_to_fit();
+  } else {
+    out.deltas.clear();
+    out.deltas.shrink_to_fit();
+  }
+}
+
+void NeighborSearch::build(const UniformGrid& grid, const std::vector<Vec3>& qx, const std::vector<Real>& qH,
+                           const std::vector<GridPoints>& sources, int selfSource, Real maxH,
+                           NeighborList& out, ListForm form) {
+  // narrow lists only for the query points among themselves, and where every offset fits
+  if (form == ListForm::kNarrow && sources.size() == 1 && selfSource == 0 && sources[0].indexOffset == 0 &&
+      buildLists<std::int16_t>(grid, qx, qH, sources, selfSource, maxH, out, false)) {
+    settleForm<std::int16_t>(out);
+    return;
+  }
+  buildLists<std::uint32_t>(grid, qx, qH, sources, selfSource, maxH, out, false);
+  settleForm<std::uint32_t>(out);
 }
 
 void NeighborSearch::buildSymmetric(const UniformGrid& grid, const std::vector<Vec3>& x,
                                     const std::vector<Real>& H, const std::vector<std::uint32_t>& cells,
-                                    Real maxH, NeighborList& out) {
+                                    Real maxH, NeighborList& out, ListForm form) {
+  if (form == ListForm::kNarrow && buildSymmetricAs<std::int16_t>(grid, x, H, cells, maxH, out)) {
+    settleForm<std::int16_t>(out);
+    return;
+  }
+  buildSymmetricAs<std::uint32_t>(grid, x, H, cells, maxH, out);
+  settleForm<std::uint32_t>(out);
+}
+
+template <class T>
+bool NeighborSearch::buildSymmetricAs(const UniformGrid& grid, const std::vector<Vec3>& x,
+                                      const std::vector<Real>& H, const std::vector<std::uint32_t>& cells,
+                                      Real maxH, NeighborList& out) {
   using Range = tbb::blocked_range<std::size_t>;
+  std::vector<T>& store = entriesOf<T>(out);
   const std::size_t n = x.size();
   const std::size_t nChunks = (n + kChunk - 1) / kChunk;
   // room for the whole lists of the last build, so that widening the own lists below seldom reallocates
-  if (out.indices.capacity() < m_lastTotal)
-    out.indices.reserve(withSlack(m_lastTotal));
+  if (store.capacity() < m_lastTotal)
+    store.reserve(withSlack(m_lastTotal));
   // A fine point next to coarse ones otherwise searches as far as the coarsest pair support, twice its own
   // in the adaptive modes; here it searches as far as its own, and the pairs with larger points come from
   // theirs (a pair is within reach of the larger point's support). The own lists are written straight into
   // `out` and then widened in place: no second copy of the lists.
-  buildLists(grid, x, H, {GridPoints{x.data(), H.data(), 0, &cells, 0}}, 0, maxH, out, true);
+  // (a pair received is the reverse of an own pair: its offset fits when the own pair's does)
+  if (!buildLists<T>(grid, x, H, {GridPoints{x.data(), H.data(), 0, &cells, 0}}, 0, maxH, out, true))
+    return false;
   m_ownOffsets.swap(out.offsets);
   const std::uint32_t* ownOff = m_ownOffsets.data();
   const Real* h = H.data();
@@ -750,14 +849,15 @@ void NeighborSearch::buildSymmetric(const UniformGrid& grid, const std::vector<V
   m_blockSlots.assign(nBlocks * n, 0);
   std::uint32_t* slots = m_blockSlots.data();
   {
-    const std::uint32_t* own = out.indices.data();
+    const T* own = store.data();
     parallelFor(Range(0, nBlocks, 1), [&](const Range& br) {
       for (std::size_t b = br.begin(); b < br.end(); ++b) {
         std::uint32_t* count = slots + b * n;
         for (std::size_t i = m_blockFirst[b]; i < m_blockFirst[b + 1]; ++i) {
           for (std::uint32_t k = ownOff[i]; k < ownOff[i + 1]; ++k) {
-            if (h[own[k]] < h[i])
-              ++count[own[k]];
+            const std::uint32_t j = neighborOf(i, own[k]);
+            if (h[j] < h[i])
+              ++count[j];
           }
         }
       }
@@ -807,16 +907,16 @@ void NeighborSearch::buildSymmetric(const UniformGrid& grid, const std::vector<V
   // eighth beyond that is released
   const std::size_t own = ownOff[n];
   const std::size_t wanted = withSlack(std::max(total, roomsFor(own, nChunks)));
-  if (out.indices.capacity() < total) {
-    out.indices.reserve(wanted);
-  } else if (out.indices.capacity() > wanted + wanted / 8) {
-    std::vector<std::uint32_t> fitted;
+  if (store.capacity() < total) {
+    store.reserve(wanted);
+  } else if (store.capacity() > wanted + wanted / 8) {
+    std::vector<T> fitted;
     fitted.reserve(wanted);
-    fitted.assign(out.indices.begin(), out.indices.end());
-    out.indices.swap(fitted);
+    fitted.assign(store.begin(), store.end());
+    store.swap(fitted);
   }
-  out.indices.resize(total);
-  std::uint32_t* dst = out.indices.data();
+  store.resize(total);
+  T* dst = store.data();
   // Widen in place. First each chunk's own lists move, as one block, to the end of the chunk's final range,
   // last chunk first (every block moves right, and only into room that no later chunk uses any more) ...
   for (std::size_t chunk = nChunks; chunk-- > 0;) {
@@ -825,7 +925,7 @@ void NeighborSearch::buildSymmetric(const UniformGrid& grid, const std::vector<V
     const std::size_t length = ownOff[i1] - ownOff[i0];
     const std::size_t to = out.offsets[i1] - length;
     if (length > 0 && to != ownOff[i0])
-      std::memmove(dst + to, dst + ownOff[i0], length * sizeof(std::uint32_t));
+      std::memmove(dst + to, dst + ownOff[i0], length * sizeof(T));
   }
   // ... then, chunk by chunk in parallel, each own list moves left to its final start (front to back, so no
   // list is overwritten before it moves); `received` becomes where i's received pairs start
@@ -838,7 +938,7 @@ void NeighborSearch::buildSymmetric(const UniformGrid& grid, const std::vector<V
         const std::size_t from = block + (ownOff[i] - ownOff[i0]);
         const std::uint32_t a = ownOff[i + 1] - ownOff[i];
         if (a > 0 && from != out.offsets[i])
-          std::memmove(dst + out.offsets[i], dst + from, a * sizeof(std::uint32_t));
+          std::memmove(dst + out.offsets[i], dst + from, a * sizeof(T));
         received[i] = out.offsets[i] + a;
       }
     }
@@ -852,9 +952,9 @@ void NeighborSearch::buildSymmetric(const UniformGrid& grid, const std::vector<V
         const std::uint32_t first = out.offsets[i];
         const std::uint32_t last = first + (ownOff[i + 1] - ownOff[i]);
         for (std::uint32_t k = first; k < last; ++k) {
-          const std::uint32_t j = dst[k];
+          const std::uint32_t j = neighborOf(i, dst[k]);
           if (h[j] < h[i])
-            dst[received[j] + next[j]++] = std::uint32_t(i);
+            dst[received[j] + next[j]++] = entryFor<T>(j, std::uint32_t(i));
         }
       }
     }
@@ -862,6 +962,7 @@ void NeighborSearch::buildSymmetric(const UniformGrid& grid, const std::vector<V
   // The two parts are left as they are, each ascending: merging them into build()'s order cost 17 % of this
   // search on the hand tank at r = 5 mm (3.8 % of a step), and a fixed order is all the sums need to be the
   // same whatever the thread count.
+  return true;
 }
 
 }  // namespace fp::sim

@@ -82,18 +82,65 @@ class UniformGrid {
   std::vector<std::uint32_t> m_bucket;
 };
 
-/// Neighbour lists in compressed-row form: the neighbours of particle i are indices[offsets[i] ..
-/// offsets[i+1]).
+/// How a list of neighbours of the points themselves stores its indices: 32-bit indices, or 16-bit offsets
+/// j - i from the row (half the bytes: the lists are the largest arrays of a step). Points sorted by cell lie
+/// close to their neighbours in the order; a build whose offsets do not all fit 16 bits writes wide lists.
+enum class ListForm { kWide, kNarrow };
+
+/// Reads the entries of wide lists (NeighborList::visit): neighbour j of entry k of row i is rows(i, k), or
+/// base(i) + offset(k), which lets a hot loop address its arrays from the row's base as (x + base)[offset].
+struct WideRows {
+  const std::uint32_t* index;
+  std::uint32_t operator()(std::size_t, std::uint32_t k) const { return index[k]; }
+  static std::ptrdiff_t base(std::size_t) { return 0; }
+  std::uint32_t offset(std::uint32_t k) const { return index[k]; }
+};
+/// Reads the entries of narrow lists (NeighborList::visit). The index is computed in 64 bits, so that the
+/// compiler can address x[i + d] as (x + i)[d], the row's base hoisted out of the loop over its entries.
+struct NarrowRows {
+  const std::int16_t* delta;
+  std::size_t operator()(std::size_t i, std::uint32_t k) const {
+    return std::size_t(std::ptrdiff_t(i) + std::ptrdiff_t(delta[k]));
+  }
+  static std::ptrdiff_t base(std::size_t i) { return std::ptrdiff_t(i); }
+  std::ptrdiff_t offset(std::uint32_t k) const { return delta[k]; }
+};
+
+/// Neighbour lists in compressed-row form: the neighbours of particle i are the entries offsets[i] ..
+/// offsets[i+1], read with neighbor(i, k): indices[k] (wide lists) or i + deltas[k] (narrow lists).
 struct NeighborList {
   std::vector<std::uint32_t> offsets;  ///< size n + 1
-  std::vector<std::uint32_t> indices;  ///< neighbour indices
+  std::vector<std::uint32_t> indices;  ///< neighbour indices (wide lists)
+  std::vector<std::int16_t> deltas;    ///< j - i of each neighbour j of row i (narrow lists)
+  bool narrow = false;                 ///< whether the entries are in `deltas`
   /// neighbours per chunk of query points at the last build: the next build's room estimate
   std::vector<std::uint32_t> chunkCounts;
   /// number of neighbours of particle i
   std::uint32_t count(std::size_t i) const { return offsets[i + 1] - offsets[i]; }
+  /// number of entries of all lists
+  std::size_t entries() const { return offsets.empty() ? 0 : offsets.back(); }
+  /// entry k of row i: a neighbour of particle i
+  std::uint32_t neighbor(std::size_t i, std::uint32_t k) const {
+    return narrow ? std::uint32_t(std::int32_t(i) + std::int32_t(deltas[k])) : indices[k];
+  }
+  /// f(rows) with rows(i, k) == neighbor(i, k), resolved once for a whole pass instead of for every entry
+  template <class F>
+  decltype(auto) visit(F&& f) const {
+    if (narrow)
+      return f(NarrowRows{deltas.data()});
+    return f(WideRows{indices.data()});
+  }
+  /// empties the lists (keeps capacity)
+  void clear() {
+    offsets.clear();
+    indices.clear();
+    deltas.clear();
+    narrow = false;
+  }
   /// bytes held
   std::size_t memoryBytes() const {
-    return (offsets.capacity() + indices.capacity() + chunkCounts.capacity()) * sizeof(std::uint32_t);
+    return (offsets.capacity() + indices.capacity() + chunkCounts.capacity()) * sizeof(std::uint32_t) +
+           deltas.capacity() * sizeof(std::int16_t);
   }
 };
 
@@ -180,10 +227,11 @@ class NeighborSearch {
   /// position in `sources`
   /// (-1: none). `maxH` is the largest support radius among the sources with per-point radii (a source with
   /// a uniform radius is searched only as far as that radius needs). Every list is in ascending index order.
+  /// `form` kNarrow writes narrow lists where that is possible: lists of the query points among themselves
+  /// (one source, the queries, selfSource 0, index offset 0) whose offsets all fit 16 bits; else wide ones.
   void build(const UniformGrid& grid, const std::vector<Vec3>& qx, const std::vector<Real>& qH,
-             const std::vector<GridPoints>& sources, int selfSource, Real maxH, NeighborList& out) {
-    buildLists(grid, qx, qH, sources, selfSource, maxH, out, false);
-  }
+             const std::vector<GridPoints>& sources, int selfSource, Real maxH, NeighborList& out,
+             ListForm form = ListForm::kWide);
 
   /// The pairs of build(grid, x, H, {{x, H, 0, &cells, 0}}, 0, maxH, out), found with less work when sizes
   /// are mixed: each point searches only as far as its own support, for the points no larger than itself,
@@ -192,7 +240,8 @@ class NeighborSearch {
   /// the thread count (build() lists in ascending order throughout). `x`, `H` and `cells` are the points
   /// sorted by UniformGrid::sort; `maxH` their largest support [m].
   void buildSymmetric(const UniformGrid& grid, const std::vector<Vec3>& x, const std::vector<Real>& H,
-                      const std::vector<std::uint32_t>& cells, Real maxH, NeighborList& out);
+                      const std::vector<std::uint32_t>& cells, Real maxH, NeighborList& out,
+                      ListForm form = ListForm::kWide);
 
   /// bytes held by scratch buffers (the lists are written in place)
   std::size_t memoryBytes() const {
@@ -204,9 +253,16 @@ class NeighborSearch {
  private:
   /// build(); with `ownSupport`, a source with per-point supports yields, for query i, only its points j with
   /// H_j <= H_i (searched as far as H_i)
-  void buildLists(const UniformGrid& grid, const std::vector<Vec3>& qx, const std::vector<Real>& qH,
+  /// The lists written as T: std::uint32_t (wide) or std::int16_t (narrow: false, and the lists unusable,
+  /// where an offset does not fit).
+  template <class T>
+  bool buildLists(const UniformGrid& grid, const std::vector<Vec3>& qx, const std::vector<Real>& qH,
                   const std::vector<GridPoints>& sources, int selfSource, Real maxH, NeighborList& out,
                   bool ownSupport);
+  /// buildSymmetric's lists written as T (as buildLists)
+  template <class T>
+  bool buildSymmetricAs(const UniformGrid& grid, const std::vector<Vec3>& x, const std::vector<Real>& H,
+                        const std::vector<std::uint32_t>& cells, Real maxH, NeighborList& out);
 
   // buildSymmetric: where each point's own list (its neighbours no larger than itself) was written
   std::vector<std::uint32_t> m_ownOffsets;

@@ -50,10 +50,12 @@ constexpr std::uint32_t kFlagTimeLevel1 = 1u << 16;
 
 /// Rows of `in` filtered into `out`: for k in [0, rows), out's row k holds the entries j of in's row rowOf(k)
 /// with keepEntry(j), or none where !keepRow(k). Blocks of rows count what they keep, then write it from
-/// their offsets, so the result does not depend on the thread count.
+/// their offsets, so the result does not depend on the thread count. `out` is wide, or, with `sameRows`
+/// (rowOf(k) == k), in the form of `in`.
 template <class RowOf, class KeepRow, class KeepEntry>
 void filterRows(const NeighborList& in, std::size_t rows, const RowOf& rowOf, const KeepRow& keepRow,
-                const KeepEntry& keepEntry, NeighborList& out) {
+                const KeepEntry& keepEntry, NeighborList& out, bool sameRows = false) {
+  const bool narrow = sameRows && in.narrow;
   using Range = tbb::blocked_range<std::size_t>;
   constexpr std::size_t kBlock = 2048;
   const std::size_t blocks = (rows + kBlock - 1) / kBlock;
@@ -66,7 +68,7 @@ void filterRows(const NeighborList& in, std::size_t rows, const RowOf& rowOf, co
           continue;
         const std::size_t i = rowOf(k);
         for (std::uint32_t q = in.offsets[i]; q < in.offsets[i + 1]; ++q)
-          count += keepEntry(in.indices[q]) ? 1 : 0;
+          count += keepEntry(in.neighbor(i, q)) ? 1 : 0;
       }
       first[b + 1] = count;
     }
@@ -74,7 +76,11 @@ void filterRows(const NeighborList& in, std::size_t rows, const RowOf& rowOf, co
   for (std::size_t b = 0; b < blocks; ++b)
     first[b + 1] += first[b];
   out.offsets.resize(rows + 1);
-  out.indices.resize(first[blocks]);
+  out.narrow = narrow;
+  if (narrow)
+    out.deltas.resize(first[blocks]);
+  else
+    out.indices.resize(first[blocks]);
   parallelFor(Range(0, blocks, 1), [&](const Range& r) {
     for (std::size_t b = r.begin(); b < r.end(); ++b) {
       std::uint32_t write = first[b];
@@ -84,8 +90,13 @@ void filterRows(const NeighborList& in, std::size_t rows, const RowOf& rowOf, co
           continue;
         const std::size_t i = rowOf(k);
         for (std::uint32_t q = in.offsets[i]; q < in.offsets[i + 1]; ++q) {
-          if (keepEntry(in.indices[q]))
-            out.indices[write++] = in.indices[q];
+          const std::uint32_t j = in.neighbor(i, q);
+          if (!keepEntry(j))
+            continue;
+          if (narrow)
+            out.deltas[write++] = in.deltas[q];
+          else
+            out.indices[write++] = j;
         }
       }
     }
@@ -98,9 +109,11 @@ void filterRows(const NeighborList& in, std::size_t rows, const RowOf& rowOf, co
 void dropNeighbors(NeighborList& list, const std::vector<std::uint8_t>& held, NeighborList& scratch) {
   filterRows(
       list, list.offsets.size() - 1, [](std::size_t k) { return k; }, [&](std::size_t k) { return !held[k]; },
-      [](std::uint32_t) { return true; }, scratch);
+      [](std::uint32_t) { return true; }, scratch, true);
   std::swap(list.offsets, scratch.offsets);
   std::swap(list.indices, scratch.indices);
+  std::swap(list.deltas, scratch.deltas);
+  std::swap(list.narrow, scratch.narrow);
 }
 
 /// Releases an object's spare capacity: a copy's vectors hold what they contain, no more.
@@ -610,9 +623,9 @@ void Simulation::searchFluidNeighbors() {
 
   GridPoints fluidSrc{m_fluid.x.data(), m_fluid.H.data(), 0, &m_fluidCells, 0};
   if (hRange.first < maxH)  // mixed sizes: each particle searches only as far as its own support
-    m_search.buildSymmetric(m_grid, m_fluid.x, m_fluid.H, m_fluidCells, maxH, m_fluidNbrs);
+    m_search.buildSymmetric(m_grid, m_fluid.x, m_fluid.H, m_fluidCells, maxH, m_fluidNbrs, ListForm::kNarrow);
   else
-    m_search.build(m_grid, m_fluid.x, m_fluid.H, {fluidSrc}, 0, maxH, m_fluidNbrs);
+    m_search.build(m_grid, m_fluid.x, m_fluid.H, {fluidSrc}, 0, maxH, m_fluidNbrs, ListForm::kNarrow);
 }
 
 void Simulation::searchBoundaryNeighbors() {
@@ -772,7 +785,7 @@ std::size_t Simulation::assignTimeLevels(Real dt) {
         for (std::size_t i = r.begin(); i < r.end(); ++i) {
           bool level1 = candidate[i] != 0;
           for (std::uint32_t k = m_fluidNbrs.offsets[i]; level1 && k < m_fluidNbrs.offsets[i + 1]; ++k)
-            level1 = candidate[m_fluidNbrs.indices[k]] != 0;
+            level1 = candidate[m_fluidNbrs.neighbor(i, k)] != 0;
           if (level1) {
             m_fluid.flags[i] |= kFlagTimeLevel1;
             ++count;
@@ -804,8 +817,8 @@ void Simulation::step() {
   m_preparedSeconds = 0.0;
   const std::size_t n = m_fluid.size();
   if (n > 0) {
-    st.fluidNeighbors = double(m_fluidNbrs.indices.size()) / double(n);
-    st.boundaryNeighbors = double(m_boundaryNbrs.indices.size()) / double(n);
+    st.fluidNeighbors = double(m_fluidNbrs.entries()) / double(n);
+    st.boundaryNeighbors = double(m_boundaryNbrs.entries()) / double(n);
   }
 
   // time levels: every other step is a synchronised one, where every particle takes part
@@ -941,20 +954,16 @@ void Simulation::step() {
     if (st.adaptivity.splits + st.adaptivity.merges > 0) {
       // the particles were added and removed: the lists no longer index them (capacity is kept for the next
       // search)
-      m_fluidNbrs.offsets.clear();
-      m_fluidNbrs.indices.clear();
-      m_boundaryNbrs.offsets.clear();
-      m_boundaryNbrs.indices.clear();
+      m_fluidNbrs.clear();
+      m_boundaryNbrs.clear();
     }
     Adaptivity::blendSupports(m_fluid, m_params, m_latticeMass);
     st.times.adaptation = seconds(t8, Clock::now()) + blendTime - presortTime;
   }
   if (st.heldParticles > 0) {
     // the held particles' lists were emptied: the lists no longer hold all neighbours
-    m_fluidNbrs.offsets.clear();
-    m_fluidNbrs.indices.clear();
-    m_boundaryNbrs.offsets.clear();
-    m_boundaryNbrs.indices.clear();
+    m_fluidNbrs.clear();
+    m_boundaryNbrs.clear();
   }
   m_held.clear();
   ++m_stepCount;
@@ -987,6 +996,7 @@ std::vector<MemoryItem> Simulation::memoryBreakdown() const {
     MemoryItem item{name, 0, 0};
     countVector(item, list.offsets);
     countVector(item, list.indices);
+    countVector(item, list.deltas);
     countVector(item, list.chunkCounts);
     out.push_back(item);
   };
@@ -1003,6 +1013,7 @@ std::vector<MemoryItem> Simulation::memoryBreakdown() const {
   countVector(held, m_heldMask);
   countVector(held, m_dropScratchFluid.offsets);
   countVector(held, m_dropScratchFluid.indices);
+  countVector(held, m_dropScratchFluid.deltas);
   countVector(held, m_dropScratchBoundary.offsets);
   countVector(held, m_dropScratchBoundary.indices);
   countVector(held, m_timeLevelCandidate);

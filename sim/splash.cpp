@@ -168,7 +168,7 @@ const SplashParticles& SplashGenerator::spawn(const ParticleSet& p, const Bounda
       Vec3 xhat = Vec3::Zero();
       Real magnitude = 0;  // sum of |terms|, the scale of round-off in xhat
       for (std::uint32_t k = fluidNbrs.offsets[s]; k < fluidNbrs.offsets[s + 1]; ++k) {
-        const std::uint32_t j = fluidNbrs.indices[k];
+        const std::uint32_t j = fluidNbrs.neighbor(s, k);
         const Vec3 xij = xi - m_sorted.x[j];
         const Real rho = m_sorted.rho[j];
         const Real vj = rho > Real(0) ? m_sorted.m[j] / rho : Real(0);

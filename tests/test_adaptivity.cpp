@@ -486,7 +486,7 @@ double directSplitError(const AdaptContext& ctx, std::size_t o, const std::vecto
   const Real Hs = p.H[o];
   double e = 0.0;
   for (std::uint32_t k = ctx.fluidNbrs.offsets[o]; k < ctx.fluidNbrs.offsets[o + 1]; ++k) {
-    const std::uint32_t j = ctx.fluidNbrs.indices[k];
+    const std::uint32_t j = ctx.fluidNbrs.neighbor(o, k);
     double tau = -double(Vo) * CubicSpline::w((p.x[j] - p.x[o]).norm(), pairSupport(p.H[j], p.H[o]));
     for (const Vec3& xs : children)
       tau += double(Vs) * CubicSpline::w((p.x[j] - xs).norm(), pairSupport(p.H[j], Hs));
@@ -498,7 +498,7 @@ double directSplitError(const AdaptContext& ctx, std::size_t o, const std::vecto
     for (const Vec3& xt : children)
       rho += double(Vs) * CubicSpline::w((xs - xt).norm(), Hs);
     for (std::uint32_t k = ctx.fluidNbrs.offsets[o]; k < ctx.fluidNbrs.offsets[o + 1]; ++k) {
-      const std::uint32_t j = ctx.fluidNbrs.indices[k];
+      const std::uint32_t j = ctx.fluidNbrs.neighbor(o, k);
       rho += double(p.m[j] / rho0) * CubicSpline::w((xs - p.x[j]).norm(), pairSupport(Hs, p.H[j]));
     }
     const double sb = double(ctx.boundary.volumeScale(Hs));
@@ -1188,7 +1188,7 @@ TEST(SolverTest, TheFactorPairsEachNeighbourWithBothVolumesSmall) {
     double pairs = 0.0;
     double pairsOtherForm = 0.0;
     for (std::uint32_t k = nb.fluidNbrs.offsets[i]; k < nb.fluidNbrs.offsets[i + 1]; ++k) {
-      const std::uint32_t j = nb.fluidNbrs.indices[k];
+      const std::uint32_t j = nb.fluidNbrs.neighbor(i, k);
       const Vec3d grad = CubicSpline::grad(p.x[i] - p.x[j], pairSupport(p.H[i], p.H[j])).cast<double>();
       const double Vj = double(p.m[j]) * invRho0;
       gradSum += Vj * grad;

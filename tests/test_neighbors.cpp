@@ -524,3 +524,114 @@ TEST(NeighborSearchTest, WallClearanceBoundsTheDistanceAndLeavesTheListsAsTheyWe
     EXPECT_LT(blind.indices.size(), with.indices.size());
   }
 }
+
+/// The neighbours of every entry of `l`, row by row, whatever its form.
+std::vector<std::uint32_t> decoded(const NeighborList& l) {
+  std::vector<std::uint32_t> out;
+  for (std::size_t i = 0; i + 1 < l.offsets.size(); ++i) {
+    for (std::uint32_t k = l.offsets[i]; k < l.offsets[i + 1]; ++k)
+      out.push_back(l.neighbor(i, k));
+  }
+  return out;
+}
+
+TEST(NeighborSearchTest, NarrowListsHoldTheWideListsEntriesInHalfTheBytes) {
+  // two clouds of the same count, supports spread over [h, 3 h]: a sparse one, then a dense one whose
+  // lists outgrow the rooms the sparse one left (the spill path)
+  const Real h = 0.03f;
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const Aabb sparseBox(Vec3d(0, 0, 0), Vec3d(0.8, 0.5, 0.4));
+  const Aabb denseBox(Vec3d(0, 0, 0), Vec3d(0.3, 0.25, 0.2));
+  std::vector<Cloud> clouds;
+  std::vector<UniformGrid> grids(2);
+  std::vector<std::vector<std::uint32_t>> cells(2);
+  for (int c = 0; c < 2; ++c) {
+    Cloud cloud = randomCloud(6000, h, 0.0, unsigned(31 + c), c == 0 ? sparseBox : denseBox);
+    for (Real& H : cloud.H)
+      H = u(rng) < 0.5 ? h : Real(h * (1.0 + 2.0 * u(rng)));
+    grids[std::size_t(c)].setup(c == 0 ? sparseBox : denseBox, h);
+    sortByCell(grids[std::size_t(c)], cloud, cells[std::size_t(c)]);
+    clouds.push_back(cloud);
+  }
+  for (const bool simd : {false, true}) {
+    setNeighborSimd(simd);
+    for (int threads : {1, 2}) {
+      tbb::global_control gc(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
+      for (const bool symmetric : {false, true}) {
+        NeighborSearch wideSearch, narrowSearch;
+        NeighborList wide, narrow;
+        for (std::size_t c = 0; c < 2; ++c) {
+          const Cloud& s = clouds[c];
+          const Real maxH = *std::max_element(s.H.begin(), s.H.end());
+          const std::vector<GridPoints> src{GridPoints{s.x.data(), s.H.data(), 0, &cells[c], 0}};
+          if (symmetric) {
+            wideSearch.buildSymmetric(grids[c], s.x, s.H, cells[c], maxH, wide);
+            narrowSearch.buildSymmetric(grids[c], s.x, s.H, cells[c], maxH, narrow, ListForm::kNarrow);
+          } else {
+            wideSearch.build(grids[c], s.x, s.H, src, 0, maxH, wide);
+            narrowSearch.build(grids[c], s.x, s.H, src, 0, maxH, narrow, ListForm::kNarrow);
+          }
+          const std::string where = "simd " + std::to_string(simd) + ", " + std::to_string(threads) +
+                                    " thread(s), symmetric " + std::to_string(symmetric) + ", cloud " +
+                                    std::to_string(c);
+          ASSERT_FALSE(wide.narrow) << where;
+          ASSERT_TRUE(narrow.narrow) << where;
+          EXPECT_TRUE(narrow.indices.empty()) << where;
+          ASSERT_EQ(narrow.offsets, wide.offsets) << where;
+          ASSERT_EQ(decoded(narrow), wide.indices) << where;
+          ASSERT_EQ(narrow.entries(), wide.indices.size()) << where;
+          // the entries' bytes halve (both keep the same slack)
+          EXPECT_EQ(narrow.deltas.size() * sizeof(std::int16_t) * 2,
+                    wide.indices.size() * sizeof(std::uint32_t))
+              << where;
+          EXPECT_GT(wide.indices.size(), 6000u * 10) << where;
+        }
+      }
+    }
+  }
+  setNeighborSimd(true);
+}
+
+TEST(NeighborSearchTest, NarrowListsFallBackToWideWhereAnOffsetDoesNotFit) {
+  // Point A in cell (1, 1, 1), `gap` points alone in cells 3, 5, 7, ... of its row of cells, and B next to A
+  // in the row above: sorted by cell, A is point 0 and B point gap + 1, neighbours `gap` + 1 apart in the
+  // order. 16 bits hold offsets up to 32767 each way.
+  const Real cell = 0.01f;
+  for (const std::size_t gap : {std::size_t(32766), std::size_t(32767)}) {
+    Cloud c;
+    const auto at = [&](double cx, double cy) {
+      return Vec3(Real(cx * cell), Real(cy * cell), Real(1.5 * cell));
+    };
+    c.x.push_back(at(1.5, 1.5));
+    for (std::size_t k = 0; k < gap; ++k)
+      c.x.push_back(at(3.5 + 2.0 * double(k), 1.5));
+    c.x.push_back(at(1.5, 2.2));
+    c.H.assign(c.x.size(), cell);
+    UniformGrid grid;
+    grid.setup(Aabb(Vec3d(0, 0, 0),
+                    Vec3d(double(cell) * (2.0 * double(gap) + 5.0), 4.0 * double(cell), 3.0 * double(cell))),
+               cell);
+    std::vector<std::uint32_t> cells;
+    sortByCell(grid, c, cells);
+    const std::uint32_t b = std::uint32_t(gap + 1);
+    ASSERT_GT(c.x[b].y(), Real(2 * cell)) << "B sorts last";
+    for (const bool symmetric : {false, true}) {
+      NeighborSearch search;
+      NeighborList list;
+      for (int pass = 0; pass < 2; ++pass) {
+        if (symmetric)
+          search.buildSymmetric(grid, c.x, c.H, cells, cell, list, ListForm::kNarrow);
+        else
+          search.build(grid, c.x, c.H, {GridPoints{c.x.data(), c.H.data(), 0, &cells, 0}}, 0, cell, list,
+                       ListForm::kNarrow);
+        EXPECT_EQ(list.narrow, gap < 32767) << "gap " << gap << ", symmetric " << symmetric;
+        ASSERT_EQ(list.entries(), 2u);
+        ASSERT_EQ(list.count(0), 1u);
+        EXPECT_EQ(list.neighbor(0, list.offsets[0]), b);
+        ASSERT_EQ(list.count(b), 1u);
+        EXPECT_EQ(list.neighbor(b, list.offsets[b]), 0u);
+      }
+    }
+  }
+}
