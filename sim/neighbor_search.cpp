@@ -518,8 +518,6 @@ bool NeighborSearch::buildLists(const UniformGrid& grid, const std::vector<Vec3>
   out.chunkCounts.resize(nChunks, kUnseenChunk);
   std::vector<std::size_t> roomStart(nChunks + 1, 0);
   std::vector<std::uint8_t> overflowed(nChunks, 0);
-  // (narrow lists) chunks with an offset that does not fit 16 bits
-  std::vector<std::uint8_t> tooFar(kNarrow ? nChunks : 0, 0);
   std::vector<std::vector<std::uint32_t>> spills(nChunks);
   // The largest support in each cell of every source with per-point supports (0 where empty): a fine
   // particle then skips the cells of the coarsest reach that hold only fine particles. The lists come out
@@ -539,14 +537,19 @@ bool NeighborSearch::buildLists(const UniformGrid& grid, const std::vector<Vec3>
     }
     bounds[s] = box;
   }
+  // (narrow lists) set by the first query whose offsets might not fit 16 bits: the chunks not yet begun are
+  // skipped, since the caller builds wide lists then (whatever the order, the outcome is the same)
+  std::atomic<bool> anyTooFar{false};
   auto searchChunk = [&](std::size_t chunk) {
+    if (kNarrow && anyTooFar.load(std::memory_order_relaxed))
+      return;
     const std::size_t room = roomStart[chunk + 1] - roomStart[chunk];
     T* dst = store.data() + roomStart[chunk];
     std::size_t count = 0;
     std::vector<std::uint32_t>* spill = nullptr;
     auto emit = [&](std::uint32_t j) {
       if (count < room) {
-        dst[count] = j;
+        dst[count] = entry<T>(j);
       } else {
         if (!spill)
           spill = &spills[chunk];
@@ -651,12 +654,14 @@ bool NeighborSearch::buildLists(const UniformGrid& grid, const std::vector<Vec3>
           }
         }
         // the candidates of all rows, in row order (ascending: the first run starts at the least, the last
-        // ends at the largest)
+        // ends at the largest). Narrow lists take offsets within +-32,767, not down to -32,768: the symmetric
+        // build writes each pair it finds into the other point's list too, with the opposite offset.
         const Real* sH = src.H;
         if constexpr (kNarrow) {
-          if (nRuns > 0 && (std::int64_t(i) - std::int64_t(runs[0].b) > 32768 ||
-                            std::int64_t(runs[nRuns - 1].e) - 1 - std::int64_t(i) > 32767))
-            tooFar[chunk] = 1;
+          if (nRuns > 0 && (std::int64_t(i) - std::int64_t(runs[0].b) > 32767 ||
+                            std::int64_t(runs[nRuns - 1].e) - 1 - std::int64_t(i) > 32767)) {
+            anyTooFar.store(true, std::memory_order_relaxed);
+          }
         }
 #ifdef FP_NEIGHBOR_AVX2
         if (simd && count + candidates + 7 <= room) {
@@ -707,6 +712,9 @@ bool NeighborSearch::buildLists(const UniformGrid& grid, const std::vector<Vec3>
     for (std::size_t chunk = cr.begin(); chunk < cr.end(); ++chunk)
       searchChunk(chunk);
   });
+  // (narrow lists: the chunks stopped early left their counts unwritten; nothing below may read them)
+  if (kNarrow && anyTooFar.load(std::memory_order_relaxed))
+    return false;
   std::vector<std::size_t> listStart(nChunks + 1, 0);
   for (std::size_t chunk = 0; chunk < nChunks; ++chunk)
     listStart[chunk + 1] = listStart[chunk] + out.chunkCounts[chunk];
@@ -765,8 +773,6 @@ bool NeighborSearch::buildLists(const UniformGrid& grid, const std::vector<Vec3>
                     out.offsets[i + 1] += base;
                 }
               });
-  if constexpr (kNarrow)
-    return std::find(tooFar.begin(), tooFar.end(), std::uint8_t(1)) == tooFar.end();
   return true;
 }
 
@@ -822,7 +828,7 @@ bool NeighborSearch::buildSymmetricAs(const UniformGrid& grid, const std::vector
   // in the adaptive modes; here it searches as far as its own, and the pairs with larger points come from
   // theirs (a pair is within reach of the larger point's support). The own lists are written straight into
   // `out` and then widened in place: no second copy of the lists.
-  // (a pair received is the reverse of an own pair: its offset fits when the own pair's does)
+  // (a pair received is the reverse of an own pair: its offset fits, since own offsets are within +-32,767)
   if (!buildLists<T>(grid, x, H, {GridPoints{x.data(), H.data(), 0, &cells, 0}}, 0, maxH, out, true))
     return false;
   m_ownOffsets.swap(out.offsets);

@@ -581,9 +581,9 @@ TEST(NeighborSearchTest, NarrowListsHoldTheWideListsEntriesInHalfTheBytes) {
           ASSERT_EQ(narrow.offsets, wide.offsets) << where;
           ASSERT_EQ(decoded(narrow), wide.indices) << where;
           ASSERT_EQ(narrow.entries(), wide.indices.size()) << where;
-          // the entries' bytes halve (both keep the same slack)
-          EXPECT_EQ(narrow.deltas.size() * sizeof(std::int16_t) * 2,
-                    wide.indices.size() * sizeof(std::uint32_t))
+          // the entries' bytes halve: both forms hold the same number of entries, with the same slack
+          EXPECT_EQ(narrow.deltas.capacity(), wide.indices.capacity()) << where;
+          EXPECT_EQ(wide.memoryBytes() - narrow.memoryBytes(), wide.indices.capacity() * sizeof(std::int16_t))
               << where;
           EXPECT_GT(wide.indices.size(), 6000u * 10) << where;
         }
@@ -594,44 +594,61 @@ TEST(NeighborSearchTest, NarrowListsHoldTheWideListsEntriesInHalfTheBytes) {
 }
 
 TEST(NeighborSearchTest, NarrowListsFallBackToWideWhereAnOffsetDoesNotFit) {
-  // Point A in cell (1, 1, 1), `gap` points alone in cells 3, 5, 7, ... of its row of cells, and B next to A
-  // in the row above: sorted by cell, A is point 0 and B point gap + 1, neighbours `gap` + 1 apart in the
-  // order. 16 bits hold offsets up to 32767 each way.
+  // Point A in cell (1, 1, 1), `gap` points alone in cells 3, 5, 7, ... of its row of cells, and B in a row
+  // above: sorted by cell, A is point 0 and B point gap + 1, neighbours gap + 1 apart in the order. Narrow
+  // lists hold offsets within +-32,767. With equal supports B is 0.7 cells above A, and A's search finds
+  // the offset +gap + 1. With B three times as large, 1.7 cells above, A's own search does not reach B: B's
+  // finds A at -(gap + 1), and the symmetric build writes +(gap + 1) into A's list from it.
   const Real cell = 0.01f;
-  for (const std::size_t gap : {std::size_t(32766), std::size_t(32767)}) {
-    Cloud c;
-    const auto at = [&](double cx, double cy) {
-      return Vec3(Real(cx * cell), Real(cy * cell), Real(1.5 * cell));
-    };
-    c.x.push_back(at(1.5, 1.5));
-    for (std::size_t k = 0; k < gap; ++k)
-      c.x.push_back(at(3.5 + 2.0 * double(k), 1.5));
-    c.x.push_back(at(1.5, 2.2));
-    c.H.assign(c.x.size(), cell);
-    UniformGrid grid;
-    grid.setup(Aabb(Vec3d(0, 0, 0),
-                    Vec3d(double(cell) * (2.0 * double(gap) + 5.0), 4.0 * double(cell), 3.0 * double(cell))),
-               cell);
-    std::vector<std::uint32_t> cells;
-    sortByCell(grid, c, cells);
-    const std::uint32_t b = std::uint32_t(gap + 1);
-    ASSERT_GT(c.x[b].y(), Real(2 * cell)) << "B sorts last";
-    for (const bool symmetric : {false, true}) {
-      NeighborSearch search;
-      NeighborList list;
-      for (int pass = 0; pass < 2; ++pass) {
-        if (symmetric)
-          search.buildSymmetric(grid, c.x, c.H, cells, cell, list, ListForm::kNarrow);
-        else
-          search.build(grid, c.x, c.H, {GridPoints{c.x.data(), c.H.data(), 0, &cells, 0}}, 0, cell, list,
-                       ListForm::kNarrow);
-        EXPECT_EQ(list.narrow, gap < 32767) << "gap " << gap << ", symmetric " << symmetric;
-        ASSERT_EQ(list.entries(), 2u);
-        ASSERT_EQ(list.count(0), 1u);
-        EXPECT_EQ(list.neighbor(0, list.offsets[0]), b);
-        ASSERT_EQ(list.count(b), 1u);
-        EXPECT_EQ(list.neighbor(b, list.offsets[b]), 0u);
+  for (const bool unequal : {false, true}) {
+    for (const std::size_t gap : {std::size_t(32766), std::size_t(32767)}) {
+      Cloud c;
+      const auto at = [&](double cx, double cy) {
+        return Vec3(Real(cx * cell), Real(cy * cell), Real(1.5 * cell));
+      };
+      c.x.push_back(at(1.5, 1.5));
+      for (std::size_t k = 0; k < gap; ++k)
+        c.x.push_back(at(3.5 + 2.0 * double(k), 1.5));
+      c.x.push_back(at(1.5, unequal ? 3.2 : 2.2));
+      c.H.assign(c.x.size(), cell);
+      if (unequal)
+        c.H.back() = 3 * cell;
+      const Real maxH = c.H.back();
+      UniformGrid grid;
+      grid.setup(Aabb(Vec3d(0, 0, 0), Vec3d(double(cell) * (2.0 * double(gap) + 5.0), 5.0 * double(cell),
+                                            3.0 * double(cell))),
+                 cell);
+      std::vector<std::uint32_t> cells;
+      sortByCell(grid, c, cells);
+      const std::uint32_t b = std::uint32_t(gap + 1);
+      ASSERT_GT(c.x[b].y(), Real(2 * cell)) << "B sorts last";
+      ASSERT_EQ(c.H[b], maxH);
+      for (const bool simd : {false, true}) {
+        setNeighborSimd(simd);
+        for (const bool symmetric : {false, true}) {
+          NeighborSearch search;
+          NeighborList list;
+          for (int pass = 0; pass < 2; ++pass) {
+            if (symmetric)
+              search.buildSymmetric(grid, c.x, c.H, cells, maxH, list, ListForm::kNarrow);
+            else
+              search.build(grid, c.x, c.H, {GridPoints{c.x.data(), c.H.data(), 0, &cells, 0}}, 0, maxH, list,
+                           ListForm::kNarrow);
+            const std::string where = "gap " + std::to_string(gap) + ", unequal " + std::to_string(unequal) +
+                                      ", simd " + std::to_string(simd) + ", symmetric " +
+                                      std::to_string(symmetric) + ", pass " + std::to_string(pass);
+            EXPECT_EQ(list.narrow, gap < 32767) << where;
+            // the other form's entries are released
+            EXPECT_EQ(list.narrow ? list.indices.capacity() : list.deltas.capacity(), 0u) << where;
+            ASSERT_EQ(list.entries(), 2u) << where;
+            ASSERT_EQ(list.count(0), 1u) << where;
+            EXPECT_EQ(list.neighbor(0, list.offsets[0]), b) << where;
+            ASSERT_EQ(list.count(b), 1u) << where;
+            EXPECT_EQ(list.neighbor(b, list.offsets[b]), 0u) << where;
+          }
+        }
       }
     }
   }
+  setNeighborSimd(true);
 }
