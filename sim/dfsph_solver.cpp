@@ -128,7 +128,7 @@ double DfsphSolver::densityAndFactor(SolverContext& ctx, LevelSums* levels) {
       [[maybe_unused]] Real weightSum = 0;
       [[maybe_unused]] Vec3 smooth = Vec3::Zero();  // (kXsph)
       [[maybe_unused]] const Real invRhoI = kXsph ? invRhoPrev[i] : Real(0);
-      // (the neighbours' arrays addressed from the row's base: no addition a pair for narrow lists)
+      // (the neighbours' arrays addressed from the row's base: (x + i)[d] for narrow lists)
       const std::ptrdiff_t base = fj.base(i);
       const Real* mr = m + base;
       const Vec3* xr = x + base;
@@ -222,7 +222,7 @@ double DfsphSolver::densityRatePass(const SolverContext& ctx, F&& stiffness) {
       const Vec3 xi = x[i];
       const Vec3 vi = v[i];
       Real rate = 0;
-      // (the neighbours' arrays addressed from the row's base: no addition a pair for narrow lists)
+      // (the neighbours' arrays addressed from the row's base: (x + i)[d] for narrow lists)
       const Vec3* xr = x + fj.base(i);
       const Vec3* vr = v + fj.base(i);
       for (std::uint32_t k = fo[i]; k < fo[i + 1]; ++k) {
@@ -260,7 +260,7 @@ Vec3d DfsphSolver::applyStiffness(SolverContext& ctx, Real dt, std::vector<Real>
       Vec3 dv = Vec3::Zero();
       // every pair, also those with k_i + k_j = 0 (no branch: in the divergence solve most stiffnesses are
       // zero, and a test per pair mispredicted; a zero term leaves dv exactly as it was)
-      // (the neighbours' arrays addressed from the row's base: no addition a pair for narrow lists)
+      // (the neighbours' arrays addressed from the row's base: (x + i)[d] for narrow lists)
       const Vec3* xr = x + fj.base(i);
       const Real* kr = k + fj.base(i);
       for (std::uint32_t q = fo[i]; q < fo[i + 1]; ++q) {
@@ -509,7 +509,7 @@ void DfsphSolver::nonPressureForces(SolverContext& ctx, Real dtPrevious) {
           Vec3 f = Vec3::Zero();
           if (r > Real(1e-6) * h)
             f += (mr[j] * cohesion(r, h) / r) * xij;
-          f += (mbar / m[i]) * (m_normal[i] - m_normal[std::size_t(base + std::ptrdiff_t(j))]);
+          f += (mbar / m[i]) * (m_normal[i] - m_normal[fj(i, q)]);
           ai -= gamma * Kij * f;
         }
       }

@@ -95,8 +95,7 @@ struct WideRows {
   static std::ptrdiff_t base(std::size_t) { return 0; }
   std::uint32_t offset(std::uint32_t k) const { return index[k]; }
 };
-/// Reads the entries of narrow lists (NeighborList::visit). The index is computed in 64 bits, so that the
-/// compiler can address x[i + d] as (x + i)[d], the row's base hoisted out of the loop over its entries.
+/// Reads the entries of narrow lists (NeighborList::visit, NeighborList::neighbor).
 struct NarrowRows {
   const std::int16_t* delta;
   std::size_t operator()(std::size_t i, std::uint32_t k) const {
@@ -121,7 +120,7 @@ struct NeighborList {
   std::size_t entries() const { return offsets.empty() ? 0 : offsets.back(); }
   /// entry k of row i: a neighbour of particle i
   std::uint32_t neighbor(std::size_t i, std::uint32_t k) const {
-    return narrow ? std::uint32_t(std::int32_t(i) + std::int32_t(deltas[k])) : indices[k];
+    return narrow ? std::uint32_t(NarrowRows{deltas.data()}(i, k)) : indices[k];
   }
   /// f(rows) with rows(i, k) == neighbor(i, k), resolved once for a whole pass instead of for every entry
   template <class F>
