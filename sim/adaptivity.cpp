@@ -400,9 +400,8 @@ void Adaptivity::planSplit(const AdaptContext& ctx, SplitPlan& plan) const {
       ctx.params.particleRadius * std::cbrt(double(p.m[o]) / double(plan.n) / double(ctx.mFine));
   // A signed distance is 1-Lipschitz outside the solid (where it is exact): a collider whose distance from
   // the parent exceeds the farthest child offset by the clearance cannot hold a child of any orientation.
-  // One query per collider drops those; for the others the distance is restricted to the ball the children
-  // can reach (BallSdf: for a mesh, only the triangles that can be closest to a point of it), so the K x n
-  // child queries no longer pass over all of the propeller's 1,696 triangles.
+  // One query per collider drops those; the others answer the K x n child queries (a mesh through its
+  // bounding-box tree: a few dozen of the propeller's 1,696 triangles a query).
   double reach = 0.0;
   for (const Vec3d& offset : SplitTemplates::get().offsets(plan.n))
     reach = std::max(reach, offset.norm());
@@ -417,9 +416,7 @@ void Adaptivity::planSplit(const AdaptContext& ctx, SplitPlan& plan) const {
   for (std::uint16_t c : near) {
     const ColliderState& col = ctx.colliders[c];
     const Vec3d local = col.orientation.conjugate() * (xo - col.position);
-    // (float child positions may sit a rounding step farther from the parent, or closer to the wall, than
-    // their offsets say: the margins)
-    BallSdf sdf(col.desc, local, reach * (1.0 + 1e-4) + 1e-6);
+    BallSdf sdf(col.desc, local);
     if (sdf.atCentre() - reach < 2.002 * childRadius)
       walls.push_back({&col, local, std::move(sdf)});
   }

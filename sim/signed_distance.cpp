@@ -112,6 +112,57 @@ std::uint32_t findRoot(std::vector<std::uint32_t>& parent, std::uint32_t i) {
   }
   return i;
 }
+
+// a leaf holds at most this many triangles
+constexpr std::uint32_t kTreeLeaf = 4;
+
+/// A bounding-box tree over `tris` (reordered in place into the leaves' order): each inner node splits its
+/// triangles at the median of their centroids along the longest axis of the centroids' box (ties by index,
+/// so the tree depends on the mesh alone). Depth at most log2 of the count, plus one.
+void buildTree(const TriangleMesh& mesh, std::vector<MeshSdfData::TreeNode>& nodes,
+               std::vector<std::uint32_t>& tris) {
+  std::vector<Vec3d> centroid(mesh.triangles.size());
+  for (std::uint32_t t : tris) {
+    const auto& v = mesh.triangles[t];
+    centroid[t] = (mesh.vertices[v[0]] + mesh.vertices[v[1]] + mesh.vertices[v[2]]) / 3.0;
+  }
+  struct Task {
+    std::uint32_t node, begin, end;
+  };
+  nodes.assign(1, {});
+  std::vector<Task> tasks{{0, 0, std::uint32_t(tris.size())}};
+  while (!tasks.empty()) {
+    const Task task = tasks.back();
+    tasks.pop_back();
+    Aabb box, centres;
+    for (std::uint32_t k = task.begin; k < task.end; ++k) {
+      for (std::uint32_t v : mesh.triangles[tris[k]])
+        box.extend(mesh.vertices[v]);
+      centres.extend(centroid[tris[k]]);
+    }
+    nodes[task.node].lo = box.min();
+    nodes[task.node].hi = box.max();
+    if (task.end - task.begin <= kTreeLeaf) {
+      nodes[task.node].first = task.begin;
+      nodes[task.node].count = task.end - task.begin;
+      continue;
+    }
+    int axis = 0;
+    centres.sizes().maxCoeff(&axis);
+    const std::uint32_t mid = task.begin + (task.end - task.begin) / 2;
+    std::nth_element(tris.begin() + task.begin, tris.begin() + mid, tris.begin() + task.end,
+                     [&](std::uint32_t a, std::uint32_t b) {
+                       const double ca = centroid[a][axis], cb = centroid[b][axis];
+                       return ca < cb || (ca == cb && a < b);
+                     });
+    const auto left = std::uint32_t(nodes.size());
+    nodes[task.node].first = left;
+    nodes[task.node].count = 0;
+    nodes.resize(nodes.size() + 2);
+    tasks.push_back({left, task.begin, mid});
+    tasks.push_back({left + 1, mid, task.end});
+  }
+}
 }  // namespace
 
 std::shared_ptr<const MeshSdfData> buildMeshSdfData(const TriangleMesh& mesh) {
@@ -126,16 +177,11 @@ std::shared_ptr<const MeshSdfData> buildMeshSdfData(const TriangleMesh& mesh) {
   }
   data->normals.resize(nt);
   data->angles.resize(nt);
-  data->centroids.resize(nt);
-  data->spans.resize(nt);
   for (std::size_t i = 0; i < nt; ++i) {
     const auto& t = mesh.triangles[i];
     const Vec3d& a = mesh.vertices[t[0]];
     const Vec3d& b = mesh.vertices[t[1]];
     const Vec3d& c = mesh.vertices[t[2]];
-    data->centroids[i] = (a + b + c) / 3.0;
-    data->spans[i] = std::max(
-        {(a - data->centroids[i]).norm(), (b - data->centroids[i]).norm(), (c - data->centroids[i]).norm()});
     const Vec3d n = (b - a).cross(c - a);
     const double len = n.norm();
     data->normals[i] = len > 0.0 ? Vec3d(n / len) : Vec3d::Zero();
@@ -178,6 +224,11 @@ std::shared_ptr<const MeshSdfData> buildMeshSdfData(const TriangleMesh& mesh) {
     for (std::uint32_t v : mesh.triangles[i])
       data->componentBounds[it->second].extend(mesh.vertices[v]);
   }
+  for (const std::vector<std::uint32_t>& component : data->components) {
+    data->trees.emplace_back();
+    data->treeTriangles.push_back(component);
+    buildTree(mesh, data->trees.back(), data->treeTriangles.back());
+  }
   const Aabb box = mesh.bounds();
   data->tolerance = 1e-9 * (box.isEmpty() ? 1.0 : std::max(box.diagonal().norm(), 1e-30));
   return data;
@@ -189,74 +240,113 @@ std::shared_ptr<const MeshSdfData> buildMeshSdfData(const TriangleMesh& mesh) {
 /// angle there (the corner angle at a vertex, pi on an edge, 2 pi inside), so no adjacency table is needed.
 namespace {
 
-/// The triangles of `tris` (in their order) that can lie within `slack` of the distance from p to the nearest
-/// of them, written to `out`. A triangle's distance from p is at least |p - centroid| - span and at most
-/// |p - centroid| (the centroid is one of its points), so the nearest is no farther than the smallest
-/// |p - centroid|, and a triangle whose lower bound exceeds that by more than `slack` (plus the tolerance,
-/// for round-off) is dropped without its closest point. The closest-point queries that decide are the same as
-/// over all of `tris`, so the results are bit-identical; the propeller's 1,696 triangles leave a few dozen.
-void trianglesWithin(const MeshSdfData& data, const std::vector<std::uint32_t>& tris, const Vec3d& p,
-                     double slack, std::vector<std::uint32_t>& out) {
-  thread_local std::vector<double> toCentroid2;
-  toCentroid2.resize(tris.size());
-  double nearest2 = std::numeric_limits<double>::infinity();
-  for (std::size_t k = 0; k < tris.size(); ++k) {
-    toCentroid2[k] = (p - data.centroids[tris[k]]).squaredNorm();
-    nearest2 = std::min(nearest2, toCentroid2[k]);
-  }
-  const double limit = std::sqrt(nearest2) + slack + data.tolerance;
-  out.clear();
-  for (std::size_t k = 0; k < tris.size(); ++k) {
-    const double reach = limit + data.spans[tris[k]];  // |p - centroid| - span <= limit, squared
-    if (toCentroid2[k] <= reach * reach)
-      out.push_back(tris[k]);
-  }
+/// A triangle the tree query met: its index, closest point and squared distance.
+struct Met {
+  std::uint32_t tri;
+  ClosestPoint closest;
+  double d2;
+};
+
+/// Squared distance from p to the box [lo, hi] (zero inside): at most the squared distance to anything in it.
+double boxDistance2(const Vec3d& lo, const Vec3d& hi, const Vec3d& p) {
+  const Vec3d d = (lo - p).cwiseMax(p - hi).cwiseMax(0.0);
+  return d.squaredNorm();
 }
 
-/// componentSdf over `all`, a subset of one component's triangles (in the component's order) that holds
-/// every triangle whose closest point to p is within the tolerance of the component's closest point
-double sdfOverTriangles(const TriangleMesh& mesh, const MeshSdfData& data,
-                        const std::vector<std::uint32_t>& all, const Vec3d& p) {
-  if (all.empty())
+/// The signed distance from p given the triangles `met` (in the component's order, holding every triangle
+/// whose closest point is within the tolerance of the nearest one's): the distance to the first nearest,
+/// signed by the angle-weighted pseudo-normal of the met triangles sharing its closest point.
+double signedFromMet(const MeshSdfData& data, const std::vector<Met>& met, const Vec3d& p, Vec3d* nearest,
+                     double* nearest2);
+
+/// The signed distance from p to closed component k: the tree is walked nearer child first, and a node is
+/// skipped when its box lies farther than the nearest triangle so far plus two tolerances. Every triangle
+/// whose closest point is within the tolerance of the nearest one's is then met, and the distance and
+/// pseudo-normal are assembled from the met triangles in the component's order (ascending index), which
+/// makes the result the one a pass over all of the component's triangles gives, bit for bit. `nearest`, when
+/// given, receives the nearest closest point (the first in that order at the smallest distance) and its
+/// squared distance.
+double treeSdf(const TriangleMesh& mesh, const MeshSdfData& data, std::size_t k, const Vec3d& p,
+               Vec3d* nearest = nullptr, double* nearest2 = nullptr) {
+  if (!p.allFinite())
     return std::numeric_limits<double>::infinity();
-  // a triangle whose closest point is within the tolerance of the nearest one's is within it in distance
-  thread_local std::vector<std::uint32_t> tris;
-  trianglesWithin(data, all, p, data.tolerance, tris);
-  if (tris.empty())  // a non-finite p keeps no triangle: no distance either
+  const std::vector<MeshSdfData::TreeNode>& nodes = data.trees[k];
+  const std::vector<std::uint32_t>& tris = data.treeTriangles[k];
+  thread_local std::vector<Met> met;
+  met.clear();
+  double best2 = std::numeric_limits<double>::infinity();
+  auto limit2 = [&] {
+    const double limit = std::sqrt(best2) + 2.0 * data.tolerance;
+    return limit * limit;
+  };
+  // (depth <= log2(count) + 1 < 33: one pending sibling a level)
+  std::array<std::uint32_t, 64> stack;
+  std::size_t top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const MeshSdfData::TreeNode& node = nodes[stack[--top]];
+    if (boxDistance2(node.lo, node.hi, p) > limit2())
+      continue;
+    if (node.count > 0) {
+      for (std::uint32_t s = node.first; s < node.first + node.count; ++s) {
+        const auto& t = mesh.triangles[tris[s]];
+        const ClosestPoint c =
+            closestOnTriangle(p, mesh.vertices[t[0]], mesh.vertices[t[1]], mesh.vertices[t[2]]);
+        const double d2 = (c.point - p).squaredNorm();
+        best2 = std::min(best2, d2);
+        met.push_back({tris[s], c, d2});
+      }
+      continue;
+    }
+    const MeshSdfData::TreeNode& a = nodes[node.first];
+    const MeshSdfData::TreeNode& b = nodes[node.first + 1];
+    const bool aFirst = boxDistance2(a.lo, a.hi, p) <= boxDistance2(b.lo, b.hi, p);
+    stack[top++] = aFirst ? node.first + 1 : node.first;  // (the farther one waits)
+    stack[top++] = aFirst ? node.first : node.first + 1;
+  }
+  // the triangles that can matter, in the component's order
+  const double keep2 = limit2();
+  met.erase(std::remove_if(met.begin(), met.end(), [&](const Met& m) { return !(m.d2 <= keep2); }),
+            met.end());
+  std::sort(met.begin(), met.end(), [](const Met& a, const Met& b) { return a.tri < b.tri; });
+  return signedFromMet(data, met, p, nearest, nearest2);
+}
+
+double signedFromMet(const MeshSdfData& data, const std::vector<Met>& met, const Vec3d& p, Vec3d* nearest,
+                     double* nearest2) {
+  if (met.empty())
     return std::numeric_limits<double>::infinity();
-  thread_local std::vector<ClosestPoint> closest;
-  closest.resize(tris.size());
   double best = std::numeric_limits<double>::infinity();
   std::size_t bestIndex = 0;
-  for (std::size_t k = 0; k < tris.size(); ++k) {
-    const auto& t = mesh.triangles[tris[k]];
-    closest[k] = closestOnTriangle(p, mesh.vertices[t[0]], mesh.vertices[t[1]], mesh.vertices[t[2]]);
-    const double d2 = (closest[k].point - p).squaredNorm();
-    if (d2 < best) {
-      best = d2;
-      bestIndex = k;
+  for (std::size_t s = 0; s < met.size(); ++s) {
+    if (met[s].d2 < best) {
+      best = met[s].d2;
+      bestIndex = s;
     }
   }
-  const Vec3d c = closest[bestIndex].point;
+  const Vec3d c = met[bestIndex].closest.point;
+  if (nearest)
+    *nearest = c;
+  if (nearest2)
+    *nearest2 = best;
   const double distance = std::sqrt(best);
   if (distance == 0.0)
     return 0.0;
   Vec3d pseudoNormal = Vec3d::Zero();
   const double tol2 = data.tolerance * data.tolerance;
-  for (std::size_t k = 0; k < tris.size(); ++k) {
-    if ((closest[k].point - c).squaredNorm() > tol2)
+  for (const Met& m : met) {
+    if ((m.closest.point - c).squaredNorm() > tol2)
       continue;
-    const std::uint32_t tri = tris[k];
     double weight = 2.0 * kPi;
-    switch (closest[k].feature) {
+    switch (m.closest.feature) {
       case Feature::Vertex0:
-        weight = data.angles[tri][0];
+        weight = data.angles[m.tri][0];
         break;
       case Feature::Vertex1:
-        weight = data.angles[tri][1];
+        weight = data.angles[m.tri][1];
         break;
       case Feature::Vertex2:
-        weight = data.angles[tri][2];
+        weight = data.angles[m.tri][2];
         break;
       case Feature::Edge0:
       case Feature::Edge1:
@@ -266,7 +356,7 @@ double sdfOverTriangles(const TriangleMesh& mesh, const MeshSdfData& data,
       case Feature::Face:
         break;
     }
-    pseudoNormal += weight * data.normals[tri];
+    pseudoNormal += weight * data.normals[m.tri];
   }
   return (p - c).dot(pseudoNormal) < 0.0 ? -distance : distance;
 }
@@ -275,7 +365,21 @@ double sdfOverTriangles(const TriangleMesh& mesh, const MeshSdfData& data,
 
 double componentSdf(const TriangleMesh& mesh, const MeshSdfData& data, std::size_t component,
                     const Vec3d& p) {
-  return sdfOverTriangles(mesh, data, data.components[component], p);
+  return treeSdf(mesh, data, component, p);
+}
+
+double componentSdfOverAll(const TriangleMesh& mesh, const MeshSdfData& data, std::size_t component,
+                           const Vec3d& p) {
+  if (!p.allFinite())
+    return std::numeric_limits<double>::infinity();
+  std::vector<Met> met;
+  for (std::uint32_t tri : data.components[component]) {
+    const auto& t = mesh.triangles[tri];
+    const ClosestPoint c =
+        closestOnTriangle(p, mesh.vertices[t[0]], mesh.vertices[t[1]], mesh.vertices[t[2]]);
+    met.push_back({tri, c, (c.point - p).squaredNorm()});
+  }
+  return signedFromMet(data, met, p, nullptr, nullptr);
 }
 
 namespace {
@@ -283,7 +387,7 @@ namespace {
 /// Signed distance to the union of the mesh's closed components. Overlapping components (a blade pushed into
 /// a hub) are a union: the minimum of the per-component signed distances is negative inside any of them and
 /// exact outside all of them (inside, its magnitude is the depth in the deepest component, a lower bound of
-/// the true depth). Brute force over the triangles: O(triangles) per query.
+/// the true depth). Each component through its tree: about the logarithm of its triangle count a query.
 double meshSdf(const TriangleMesh& mesh, const MeshSdfData& data, const Vec3d& p) {
   double result = std::numeric_limits<double>::infinity();
   for (std::size_t k = 0; k < data.components.size(); ++k) {
@@ -343,56 +447,30 @@ double signedDistanceLocal(const ColliderDesc& collider, const Vec3d& localPoint
   throw InputError("collider '" + collider.name + "': unknown shape");
 }
 
-BallSdf::BallSdf(const ColliderDesc& collider, const Vec3d& localCentre, double radius)
-    : m_collider(&collider) {
+BallSdf::BallSdf(const ColliderDesc& collider, const Vec3d& localCentre) : m_collider(&collider) {
   if (collider.shape != ShapeType::Mesh || !collider.mesh || collider.mesh->triangles.empty()) {
     m_centre = signedDistanceLocal(collider, localCentre);
     return;
   }
   m_data = cachedMeshSdfData(collider.mesh);
-  const TriangleMesh& mesh = *collider.mesh;
-  // The unsigned distance to a component is 1-Lipschitz: at a point q of the ball it is at most d_k + radius
-  // (d_k its distance from the centre), and a triangle farther than d_k + 2 radius from the centre is
-  // farther than that from q, so it is never q's closest (the tolerance keeps the pseudo-normal's ties).
-  m_subsets.resize(m_data->components.size());
   m_centre = std::numeric_limits<double>::infinity();
-  double nearest = std::numeric_limits<double>::infinity();
+  double nearest2 = std::numeric_limits<double>::infinity();
   for (std::size_t k = 0; k < m_data->components.size(); ++k) {
-    // the triangles that can be within 2 radius + 4 tolerance of the nearest (the reach below)
-    thread_local std::vector<std::uint32_t> tris;
-    trianglesWithin(*m_data, m_data->components[k], localCentre, 2.0 * radius + 4.0 * m_data->tolerance,
-                    tris);
-    thread_local std::vector<double> distance2;
-    distance2.resize(tris.size());
-    double best = std::numeric_limits<double>::infinity();
-    for (std::size_t t = 0; t < tris.size(); ++t) {
-      const auto& tri = mesh.triangles[tris[t]];
-      const ClosestPoint c =
-          closestOnTriangle(localCentre, mesh.vertices[tri[0]], mesh.vertices[tri[1]], mesh.vertices[tri[2]]);
-      distance2[t] = (c.point - localCentre).squaredNorm();
-      best = std::min(best, distance2[t]);
-      if (distance2[t] < nearest) {
-        nearest = distance2[t];
-        m_surfacePoint = c.point;
-        m_hasSurfacePoint = true;
-      }
+    Vec3d point = Vec3d::Zero();
+    double d2 = std::numeric_limits<double>::infinity();
+    m_centre = std::min(m_centre, treeSdf(*collider.mesh, *m_data, k, localCentre, &point, &d2));
+    if (d2 < nearest2) {
+      nearest2 = d2;
+      m_surfacePoint = point;
+      m_hasSurfacePoint = true;
     }
-    const double reach = std::sqrt(best) + 2.0 * radius + 4.0 * m_data->tolerance;
-    for (std::size_t t = 0; t < tris.size(); ++t) {
-      if (distance2[t] <= reach * reach)
-        m_subsets[k].push_back(tris[t]);
-    }
-    m_centre = std::min(m_centre, sdfOverTriangles(mesh, *m_data, m_subsets[k], localCentre));
   }
 }
 
 double BallSdf::operator()(const Vec3d& localPoint) const {
   if (!m_data)
     return signedDistanceLocal(*m_collider, localPoint);
-  double result = std::numeric_limits<double>::infinity();
-  for (const std::vector<std::uint32_t>& subset : m_subsets)
-    result = std::min(result, sdfOverTriangles(*m_collider->mesh, *m_data, subset, localPoint));
-  return result;
+  return meshSdf(*m_collider->mesh, *m_data, localPoint);
 }
 
 double signedDistance(const ColliderDesc& collider, const Vec3d& worldPoint) {

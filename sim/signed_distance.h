@@ -2,7 +2,8 @@
 /// Signed distances to collider shapes (negative inside the solid), so that fluid and split children are
 /// never placed in a wall: exact for boxes, containers, spheres and capsules; for triangle meshes the
 /// distance to the closest triangle signed by the angle-weighted pseudo-normal (Baerentzen & Aanaes 2005),
-/// with the per-mesh data built once and cached per thread.
+/// found through a bounding-box tree per closed component, with the per-mesh data built once and cached per
+/// thread.
 
 #include <array>
 #include <cstdint>
@@ -29,25 +30,35 @@ struct MeshSdfData {
   std::vector<std::array<double, 3>> angles;           ///< interior angle at each corner [rad]
   std::vector<std::vector<std::uint32_t>> components;  ///< triangles of each connected component
   std::vector<Aabb> componentBounds;                   ///< bounding box of each component
-  std::vector<Vec3d> centroids;                        ///< centroid of each triangle: one of its points
-  std::vector<double> spans;  ///< largest distance from a triangle's centroid to its corners [m]
-  double tolerance = 0.0;     ///< closest points closer than this are one feature [m]
+  /// A node of a component's bounding-box tree: a leaf (count > 0) holds `count` triangles from `first` in
+  /// the component's `treeTriangles`; an inner node's children are the nodes `first` and `first + 1`.
+  struct TreeNode {
+    Vec3d lo = Vec3d::Zero(), hi = Vec3d::Zero();  ///< the box of the node's triangles
+    std::uint32_t first = 0, count = 0;
+  };
+  std::vector<std::vector<TreeNode>> trees;               ///< per component, the root first
+  std::vector<std::vector<std::uint32_t>> treeTriangles;  ///< per component, the leaves' triangles
+  double tolerance = 0.0;  ///< closest points closer than this are one feature [m]
 };
 
 /// Builds the per-mesh data; throws InputError when a triangle references a missing vertex.
 std::shared_ptr<const MeshSdfData> buildMeshSdfData(const TriangleMesh& mesh);
 /// Signed distance from p (mesh frame) to closed component `component` of the mesh [m]
 double componentSdf(const TriangleMesh& mesh, const MeshSdfData& data, std::size_t component, const Vec3d& p);
+/// componentSdf by a pass over every triangle of the component, without the tree: the reference the tree's
+/// result equals bit for bit (tests)
+double componentSdfOverAll(const TriangleMesh& mesh, const MeshSdfData& data, std::size_t component,
+                           const Vec3d& p);
 
-/// The signed distance to one collider for points within `radius` of a centre (collider frame): the same
-/// values as signedDistanceLocal there, for a mesh at the cost of the triangles that can be closest to a
-/// point of the ball (one pass over all of them at construction). Keeps a reference to the collider.
+/// The signed distance to one collider around a centre (collider frame): the distance at the centre, the
+/// surface point nearest it, and signedDistanceLocal at other points, with the mesh's data looked up once.
+/// Keeps a reference to the collider.
 class BallSdf {
  public:
-  BallSdf(const ColliderDesc& collider, const Vec3d& localCentre, double radius);
+  BallSdf(const ColliderDesc& collider, const Vec3d& localCentre);
   /// the signed distance at the centre [m]
   double atCentre() const { return m_centre; }
-  /// the signed distance at a point within `radius` of the centre [m]
+  /// the signed distance at a point (collider frame) [m]: signedDistanceLocal's value
   double operator()(const Vec3d& localPoint) const;
   /// a point of the surface nearest the centre (collider frame), for meshes; false for the other shapes. The
   /// signed distance at any point q is at most |q - surfacePoint| (exactly the distance outside, negative
@@ -59,8 +70,7 @@ class BallSdf {
 
  private:
   const ColliderDesc* m_collider;
-  std::shared_ptr<const MeshSdfData> m_data;          // meshes only
-  std::vector<std::vector<std::uint32_t>> m_subsets;  // per component: the triangles that can be closest
+  std::shared_ptr<const MeshSdfData> m_data;  // meshes only
   double m_centre = 0.0;
   Vec3d m_surfacePoint = Vec3d::Zero();
   bool m_hasSurfacePoint = false;

@@ -1542,7 +1542,7 @@ TEST(AdaptivityTest, BallSdfEqualsTheFullMeshDistanceInItsBallSmall) {
     const Vec3d centre = box.center() + 0.6 * Vec3d(unit(rng) * box.sizes().x(), unit(rng) * box.sizes().y(),
                                                     unit(rng) * box.sizes().z());
     const double radius = 0.02 * size * (1.0 + unit(rng));
-    const BallSdf ball(propeller, centre, radius);
+    const BallSdf ball(propeller, centre);
     ASSERT_EQ(ball.atCentre(), signedDistanceLocal(propeller, centre));
     for (int k = 0; k < 25; ++k) {
       Vec3d d(unit(rng), unit(rng), unit(rng));

@@ -492,9 +492,11 @@ Vec3d referenceClosest(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec
 }
 
 TEST(PropellerTest, PrunedDistanceEqualsTheDistanceOverAllTriangles) {
-  // The mesh distance skips the triangles whose bounding sphere is farther than the nearest centroid: the
-  // magnitude of each component's distance must still be the distance to the nearest of all its triangles,
-  // near the blades (where many triangles compete) and away from them.
+  // The mesh distance walks a bounding-box tree and skips the boxes farther than the nearest triangle so far:
+  // the magnitude of each component's distance must still be the distance to the nearest of all its
+  // triangles, near the blades (where many triangles compete) and away from them, and the signed value the
+  // one a pass over every triangle gives, bit for bit (also on the mesh's corners and edges, where several
+  // triangles share the closest point and the sign comes from their pseudo-normal).
   auto mesh = std::make_shared<const TriangleMesh>(TriangleMesh::loadObj(kPropellerPath));
   const ColliderDesc c = meshCollider(mesh);
   std::mt19937 rng(7);
@@ -518,12 +520,35 @@ TEST(PropellerTest, PrunedDistanceEqualsTheDistanceOverAllTriangles) {
         const Vec3d q = referenceClosest(p, mesh->vertices[t[0]], mesh->vertices[t[1]], mesh->vertices[t[2]]);
         best = std::min(best, (q - p).norm());
       }
-      ASSERT_NEAR(std::abs(componentSdf(*mesh, *data, k, p)), best, 1e-12)
+      const double tree = componentSdf(*mesh, *data, k, p);
+      ASSERT_NEAR(std::abs(tree), best, 1e-12) << "component " << k << " at " << p.transpose();
+      ASSERT_EQ(tree, componentSdfOverAll(*mesh, *data, k, p))
           << "component " << k << " at " << p.transpose();
     }
     outside += signedDistanceLocal(c, p) > 0.0 ? 1 : 0;
   }
   EXPECT_GT(outside, 300);
+  // corners, edge midpoints and points just off them, inside and out
+  int inside = 0;
+  std::uniform_real_distribution<double> tiny(-1e-4, 1e-4);
+  for (std::size_t t = 0; t < mesh->triangles.size(); t += 7) {
+    const auto& tri = mesh->triangles[t];
+    const Vec3d& a = mesh->vertices[tri[0]];
+    const Vec3d& b = mesh->vertices[tri[1]];
+    for (const Vec3d& q : {a, Vec3d(0.5 * (a + b)), Vec3d(a + Vec3d(tiny(rng), tiny(rng), tiny(rng))),
+                           Vec3d(0.5 * (a + b) + Vec3d(tiny(rng), tiny(rng), tiny(rng)))}) {
+      for (std::size_t k = 0; k < data->components.size(); ++k) {
+        const double tree = componentSdf(*mesh, *data, k, q);
+        ASSERT_EQ(tree, componentSdfOverAll(*mesh, *data, k, q))
+            << "component " << k << " at " << q.transpose();
+        inside += tree < 0.0 ? 1 : 0;
+      }
+    }
+  }
+  EXPECT_GT(inside, 50);
+  // a point that is not finite has no distance
+  EXPECT_EQ(componentSdf(*mesh, *data, 0, Vec3d(std::nan(""), 0.0, 0.0)),
+            std::numeric_limits<double>::infinity());
 }
 
 }  // namespace
