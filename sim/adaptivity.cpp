@@ -443,7 +443,7 @@ void Adaptivity::planSplit(const AdaptContext& ctx, SplitPlan& plan) const {
           undecided.push_back(q);
       }
       for (const Vec3d& q : undecided) {
-        if (wall.sdf(q) < clearance)
+        if (!wall.sdf.atLeast(q, clearance))
           return false;
       }
     }

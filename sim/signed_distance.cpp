@@ -391,6 +391,12 @@ namespace {
 double meshSdf(const TriangleMesh& mesh, const MeshSdfData& data, const Vec3d& p) {
   double result = std::numeric_limits<double>::infinity();
   for (std::size_t k = 0; k < data.components.size(); ++k) {
+    // a component whose box lies farther than the distance so far (and than zero) holds no nearer point and
+    // not p: its distance is at least the box's, and the minimum stays
+    const double floor = std::max(result, 0.0) + 4.0 * data.tolerance;
+    if (result < std::numeric_limits<double>::infinity() &&
+        boxDistance2(data.componentBounds[k].min(), data.componentBounds[k].max(), p) > floor * floor)
+      continue;
     result = std::min(result, componentSdf(mesh, data, k, p));
   }
   return result;
@@ -447,7 +453,8 @@ double signedDistanceLocal(const ColliderDesc& collider, const Vec3d& localPoint
   throw InputError("collider '" + collider.name + "': unknown shape");
 }
 
-BallSdf::BallSdf(const ColliderDesc& collider, const Vec3d& localCentre) : m_collider(&collider) {
+BallSdf::BallSdf(const ColliderDesc& collider, const Vec3d& localCentre)
+    : m_collider(&collider), m_centrePoint(localCentre) {
   if (collider.shape != ShapeType::Mesh || !collider.mesh || collider.mesh->triangles.empty()) {
     m_centre = signedDistanceLocal(collider, localCentre);
     return;
@@ -471,6 +478,52 @@ double BallSdf::operator()(const Vec3d& localPoint) const {
   if (!m_data)
     return signedDistanceLocal(*m_collider, localPoint);
   return meshSdf(*m_collider->mesh, *m_data, localPoint);
+}
+
+bool BallSdf::atLeast(const Vec3d& localPoint, double c) const {
+  if (!m_data || !(m_centre > 0.0) || !(c > 0.0) || !localPoint.allFinite())
+    return (*this)(localPoint) >= c;
+  // Every component's signed distance is 1-Lipschitz and positive at the centre. If no triangle lies within
+  // R > |q - centre| - atCentre of q, none can vanish on the segment from the centre to q (there it is at
+  // least atCentre - t, t from the centre, and at least R - (|q - centre| - t) in magnitude): q is outside
+  // every component, at least R from each, and with R >= c the answer is yes. A triangle nearer than c
+  // answers no whatever the sign. The margins keep both answers those of the computed distance.
+  const double tol = m_data->tolerance;
+  const double reach = std::max(c, (localPoint - m_centrePoint).norm() - m_centre) + 4.0 * tol;
+  const double reach2 = reach * reach;
+  const double below2 = (c - 4.0 * tol) * (c - 4.0 * tol);
+  const TriangleMesh& mesh = *m_collider->mesh;
+  bool undecided = false;
+  for (std::size_t k = 0; k < m_data->components.size(); ++k) {
+    const Aabb& bounds = m_data->componentBounds[k];
+    if (boxDistance2(bounds.min(), bounds.max(), localPoint) > reach2)
+      continue;
+    const std::vector<MeshSdfData::TreeNode>& nodes = m_data->trees[k];
+    const std::vector<std::uint32_t>& tris = m_data->treeTriangles[k];
+    std::array<std::uint32_t, 64> stack;
+    std::size_t top = 0;
+    stack[top++] = 0;
+    while (top > 0) {
+      const MeshSdfData::TreeNode& node = nodes[stack[--top]];
+      if (boxDistance2(node.lo, node.hi, localPoint) > reach2)
+        continue;
+      if (node.count == 0) {
+        stack[top++] = node.first;
+        stack[top++] = node.first + 1;
+        continue;
+      }
+      for (std::uint32_t s = node.first; s < node.first + node.count; ++s) {
+        const auto& t = mesh.triangles[tris[s]];
+        const ClosestPoint cp =
+            closestOnTriangle(localPoint, mesh.vertices[t[0]], mesh.vertices[t[1]], mesh.vertices[t[2]]);
+        const double d2 = (cp.point - localPoint).squaredNorm();
+        if (d2 < below2)
+          return false;
+        undecided = undecided || d2 <= reach2;
+      }
+    }
+  }
+  return undecided ? (*this)(localPoint) >= c : true;
 }
 
 double signedDistance(const ColliderDesc& collider, const Vec3d& worldPoint) {

@@ -60,6 +60,11 @@ class BallSdf {
   double atCentre() const { return m_centre; }
   /// the signed distance at a point (collider frame) [m]: signedDistanceLocal's value
   double operator()(const Vec3d& localPoint) const;
+  /// whether the signed distance at a point is at least `c` > 0: the same answer as (*this)(localPoint) >= c.
+  /// For a mesh outside which the centre lies, the triangles within reach of the point decide it mostly
+  /// without a distance: one nearer than c answers no; none within max(c, |point - centre| - atCentre())
+  /// answers yes (the signed distance is 1-Lipschitz, so the point is then outside, as the centre is).
+  bool atLeast(const Vec3d& localPoint, double c) const;
   /// a point of the surface nearest the centre (collider frame), for meshes; false for the other shapes. The
   /// signed distance at any point q is at most |q - surfacePoint| (exactly the distance outside, negative
   /// inside).
@@ -71,6 +76,7 @@ class BallSdf {
  private:
   const ColliderDesc* m_collider;
   std::shared_ptr<const MeshSdfData> m_data;  // meshes only
+  Vec3d m_centrePoint = Vec3d::Zero();
   double m_centre = 0.0;
   Vec3d m_surfacePoint = Vec3d::Zero();
   bool m_hasSurfacePoint = false;

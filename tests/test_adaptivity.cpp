@@ -1525,8 +1525,9 @@ TEST(DivergenceSolveTest, AFineParticleAmongCoarseOnesIsSolvedASurfaceParticleIs
 }
 
 TEST(AdaptivityTest, BallSdfEqualsTheFullMeshDistanceInItsBallSmall) {
-  // The split check's signed distance restricted to a ball (a subset of the propeller's triangles) gives the
-  // full brute-force distance bit for bit at points in the ball, outside and inside the blades.
+  // The split check's signed distance around a parent gives the full distance bit for bit at points around
+  // it, outside and inside the blades, and its test "at least c" (which mostly decides from the triangles
+  // within reach, without a distance) answers as the distance does, also for c at the distance itself.
   ColliderDesc propeller;
   propeller.name = "propeller";
   propeller.shape = ShapeType::Mesh;
@@ -1538,12 +1539,15 @@ TEST(AdaptivityTest, BallSdfEqualsTheFullMeshDistanceInItsBallSmall) {
   std::uniform_real_distribution<double> unit(-1.0, 1.0);
   int inside = 0;
   int compared = 0;
+  int outsideCentres = 0;  // (where atLeast may decide without a distance)
+  std::array<int, 2> decided{0, 0};
   for (int b = 0; b < 40; ++b) {
     const Vec3d centre = box.center() + 0.6 * Vec3d(unit(rng) * box.sizes().x(), unit(rng) * box.sizes().y(),
                                                     unit(rng) * box.sizes().z());
     const double radius = 0.02 * size * (1.0 + unit(rng));
     const BallSdf ball(propeller, centre);
     ASSERT_EQ(ball.atCentre(), signedDistanceLocal(propeller, centre));
+    outsideCentres += ball.atCentre() > 0.0;
     for (int k = 0; k < 25; ++k) {
       Vec3d d(unit(rng), unit(rng), unit(rng));
       if (d.norm() > 1.0)
@@ -1553,10 +1557,21 @@ TEST(AdaptivityTest, BallSdfEqualsTheFullMeshDistanceInItsBallSmall) {
       ASSERT_EQ(ball(q), exact) << "ball " << b << " point " << k;
       inside += exact < 0.0;
       ++compared;
+      for (const double c : {0.25 * radius, 0.5 * radius, radius, 2.0 * radius, std::abs(exact),
+                             std::nextafter(std::abs(exact), 0.0), std::nextafter(std::abs(exact), 1.0)}) {
+        if (!(c > 0.0))
+          continue;
+        const bool atLeast = ball.atLeast(q, c);
+        ASSERT_EQ(atLeast, exact >= c) << "ball " << b << " point " << k << " c " << c;
+        decided[atLeast ? 1 : 0] += 1;
+      }
     }
   }
   EXPECT_GT(compared, 400);
   EXPECT_GT(inside, 0);
+  EXPECT_GT(outsideCentres, 10);
+  EXPECT_GT(decided[0], 200);
+  EXPECT_GT(decided[1], 200);
 }
 
 TEST(DivergenceSolveTest, SprayThatReachedAWallIsNotThrownBackByTheWarmStart) {
