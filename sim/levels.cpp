@@ -117,28 +117,34 @@ void setSurfaceFlag(ParticleSet& p, std::size_t i, bool surface) {
 }  // namespace
 
 void detectSurface(ParticleSet& p, const NeighborList& fluidNbrs, const NeighborList& boundaryNbrs,
-                   const BoundarySet& boundary) {
+                   const BoundarySet& boundary, const Real* volume) {
   const std::size_t n = p.size();
-  parallelFor(Range(0, n, kGrain), [&](const Range& r) {
-    for (std::size_t i = r.begin(); i < r.end(); ++i) {
-      const Vec3 xi = p.x[i];
-      // Directions to the neighbours weighted by their volumes: with particles of different sizes an
-      // unweighted sum points away from the many fine neighbours towards a few coarse ones and flags
-      // interfaces as surface.
-      Vec3 away = Vec3::Zero();
-      Real volume = 0;
-      for (std::uint32_t k = fluidNbrs.offsets[i]; k < fluidNbrs.offsets[i + 1]; ++k) {
-        const std::uint32_t j = fluidNbrs.neighbor(i, k);
-        const Vec3 d = xi - p.x[j];
-        const Real len = d.norm();
-        const Real vj = p.m[j] / p.rho[j];
-        volume += vj;
-        if (len > Real(0))
-          away += (vj / len) * d;
+  auto run = [&](auto volumeOf) {
+    parallelFor(Range(0, n, kGrain), [&](const Range& r) {
+      for (std::size_t i = r.begin(); i < r.end(); ++i) {
+        const Vec3 xi = p.x[i];
+        // Directions to the neighbours weighted by their volumes: with particles of different sizes an
+        // unweighted sum points away from the many fine neighbours towards a few coarse ones and flags
+        // interfaces as surface.
+        Vec3 away = Vec3::Zero();
+        Real sum = 0;
+        for (std::uint32_t k = fluidNbrs.offsets[i]; k < fluidNbrs.offsets[i + 1]; ++k) {
+          const std::uint32_t j = fluidNbrs.neighbor(i, k);
+          const Vec3 d = xi - p.x[j];
+          const Real len = d.norm();
+          const Real vj = volumeOf(j);
+          sum += vj;
+          if (len > Real(0))
+            away += (vj / len) * d;
+        }
+        setSurfaceFlag(p, i, isSurface(p, i, away, sum, fluidNbrs, boundaryNbrs, boundary));
       }
-      setSurfaceFlag(p, i, isSurface(p, i, away, volume, fluidNbrs, boundaryNbrs, boundary));
-    }
-  });
+    });
+  };
+  if (volume)
+    run([volume](std::uint32_t j) { return volume[j]; });
+  else
+    run([&p](std::uint32_t j) { return p.m[j] / p.rho[j]; });
 }
 
 void LevelEstimator::surfaceAndRawDynamics(ParticleSet& p, const NeighborList& fluidNbrs,
@@ -225,14 +231,14 @@ bool LevelEstimator::distancePass(ParticleSet& p, const NeighborList& fluidNbrs,
                                   const Real* rawOmega, const Real* rawNu) {
   const std::size_t n = p.size();
   std::atomic<bool> changed{false};
+  const Real* volume = m_volume.data();
   parallelFor(Range(0, n, kGrain), [&](const Range& r) {
     bool local = false;
     for (std::size_t i = r.begin(); i < r.end(); ++i) {
-      const Real best = distanceAt(p, i, fluidNbrs, cap);
+      const Real best = rawOmega ? distanceAndDynamicsAt(p, i, fluidNbrs, cap, rawOmega, rawNu, volume)
+                                 : distanceAt(p, i, fluidNbrs, cap);
       local |= best != p.phi[i];
       m_phiNext[i] = best;
-      if (rawOmega)
-        smoothDynamicsAt(p, i, fluidNbrs, rawOmega, rawNu);
     }
     if (local)
       changed = true;
@@ -241,24 +247,33 @@ bool LevelEstimator::distancePass(ParticleSet& p, const NeighborList& fluidNbrs,
   return changed;
 }
 
-void LevelEstimator::smoothDynamicsAt(ParticleSet& p, std::size_t i, const NeighborList& fluidNbrs,
-                                      const Real* rawOmega, const Real* rawNu) {
+Real LevelEstimator::distanceAndDynamicsAt(ParticleSet& p, std::size_t i, const NeighborList& fluidNbrs,
+                                           Real cap, const Real* rawOmega, const Real* rawNu,
+                                           const Real* volume) {
   // The raw values are averaged over the kernel (Shepard): the SPH curl of a disordered particle set carries
   // noise of the order of the velocity fluctuation over the support, which the raw values would mistake for
-  // vortices.
-  const Real self = p.m[i] / p.rho[i] * CubicSpline::w0(p.H[i]);
+  // vortices. The distance's minimum (distanceAt) shares the pair distances.
+  const bool surface = (p.flags[i] & kFlagSurface) != 0;
+  Real best = cap;
+  const Vec3 xi = p.x[i];
+  const Real Hi = p.H[i];
+  const Real self = volume[i] * CubicSpline::w0(Hi);
   Real omega = self * rawOmega[i];
   Real nu = self * rawNu[i];
   Real den = self;
   for (std::uint32_t k = fluidNbrs.offsets[i]; k < fluidNbrs.offsets[i + 1]; ++k) {
     const std::uint32_t j = fluidNbrs.neighbor(i, k);
-    const Real w = p.m[j] / p.rho[j] * CubicSpline::w((p.x[i] - p.x[j]).norm(), pairSupport(p.H[i], p.H[j]));
+    const Real len = (xi - p.x[j]).norm();
+    if (p.phi[j] < best)
+      best = std::min(best, p.phi[j] + len);
+    const Real w = volume[j] * CubicSpline::w(len, pairSupport(Hi, p.H[j]));
     omega += w * rawOmega[j];
     nu += w * rawNu[j];
     den += w;
   }
   p.omega[i] = omega / den;
   p.nu[i] = nu / den;
+  return surface ? Real(0) : best;
 }
 
 void LevelEstimator::compute(ParticleSet& p, const NeighborList& fluidNbrs, const NeighborList& boundaryNbrs,
@@ -268,10 +283,6 @@ void LevelEstimator::compute(ParticleSet& p, const NeighborList& fluidNbrs, cons
   const Real r = Real(params.particleRadius);
   const double mBase = double(mFine) * params.massRatio;
   const bool dynamic = mode == AdaptivityMode::FluidPlaying;
-  // the surface of the previous computation, for the hysteresis of the targets (phi is 0 only there)
-  std::vector<std::uint8_t> wasSurface(n);
-  for (std::size_t i = 0; i < n; ++i)
-    wasSurface[i] = p.phi[i] == Real(0);
   // Three passes over the neighbours in all: surface, raw curl and velocity difference; their kernel average
   // with the first distance pass; the second distance pass. With the density pass's sums (the steps) the
   // first evaluates no kernel: it is the surface test alone.
@@ -282,19 +293,27 @@ void LevelEstimator::compute(ParticleSet& p, const NeighborList& fluidNbrs, cons
       given && sums->curl.size() == n && sums->nuSum.size() == n && sums->weightSum.size() == n;
   // sums filled for another particle set are a caller's error (the fallback below would hide it)
   assert(useSums == given);
-  if (useSums) {
-    detectSurface(p, fluidNbrs, boundaryNbrs, boundary);
-    // finished with the densities of now (a split child's may have been blended since the pass), in place:
-    // curl becomes omega, nuSum becomes nu
-    parallelFor(Range(0, n, kGrain), [&](const Range& rg) {
-      for (std::size_t i = rg.begin(); i < rg.end(); ++i) {
+  // One pass over the particles: the surface of the previous computation, for the hysteresis of the targets
+  // (phi is 0 only there); the volumes m / rho the neighbour passes read; and with the density pass's sums,
+  // those finished with the densities of now (a split child's may have been blended since the pass), in
+  // place: curl becomes omega, nuSum becomes nu.
+  m_wasSurface.resize(n);
+  m_volume.resize(n);
+  parallelFor(Range(0, n, kGrain), [&](const Range& rg) {
+    for (std::size_t i = rg.begin(); i < rg.end(); ++i) {
+      m_wasSurface[i] = p.phi[i] == Real(0);
+      m_volume[i] = p.m[i] / p.rho[i];
+      if (useSums) {
         sums->curl[i] /= p.rho[i];
         // the particle itself is in the denominator (weight m_i / rho_i W(0)), so an isolated particle has
         // nu = 0
-        const Real den = p.m[i] / p.rho[i] * CubicSpline::w0(p.H[i]) + sums->weightSum[i];
+        const Real den = m_volume[i] * CubicSpline::w0(p.H[i]) + sums->weightSum[i];
         sums->nuSum[i] = den > Real(0) ? sums->nuSum[i] / den : Real(0);
       }
-    });
+    }
+  });
+  if (useSums) {
+    detectSurface(p, fluidNbrs, boundaryNbrs, boundary, m_volume.data());
     rawOmega = sums->curl.data();
     rawNu = sums->nuSum.data();
   } else if (dynamic) {
@@ -303,7 +322,7 @@ void LevelEstimator::compute(ParticleSet& p, const NeighborList& fluidNbrs, cons
     rawOmega = m_rawOmega.data();
     rawNu = m_rawNu.data();
   } else {
-    detectSurface(p, fluidNbrs, boundaryNbrs, boundary);
+    detectSurface(p, fluidNbrs, boundaryNbrs, boundary, m_volume.data());
     std::fill(p.omega.begin(), p.omega.end(), Real(0));
     std::fill(p.nu.begin(), p.nu.end(), Real(0));
   }
@@ -379,7 +398,7 @@ void LevelEstimator::compute(ParticleSet& p, const NeighborList& fluidNbrs, cons
       // that stays ends fine.
       const double held = double(p.mOpt[i]);
       const bool coarsest = m >= mBase * (1.0 - 1e-6);
-      const bool finest = p.phi[i] == Real(0) && wasSurface[i];
+      const bool finest = p.phi[i] == Real(0) && m_wasSurface[i];
       if (!coarsest && !finest && std::abs(m - held) <= kTargetBand * held)
         m = held;
       target[i] = Real(m);
@@ -388,7 +407,9 @@ void LevelEstimator::compute(ParticleSet& p, const NeighborList& fluidNbrs, cons
 }
 
 std::size_t LevelEstimator::memoryBytes() const {
-  return (m_phiNext.capacity() + m_rawOmega.capacity() + m_rawNu.capacity()) * sizeof(Real);
+  return (m_phiNext.capacity() + m_rawOmega.capacity() + m_rawNu.capacity() + m_volume.capacity()) *
+             sizeof(Real) +
+         m_wasSurface.capacity();
 }
 
 }  // namespace fp::sim

@@ -30,9 +30,10 @@ Real supportForMass(Real m, Real mFine, Real fineRadius);
 
 /// Flags (kFlagSurface) the particles on the free surface: the cone test of Winchenbach et al. 2017 on
 /// volume-weighted neighbour directions, boundary particles counting as neighbours. Used by the levels and by
-/// the splash post-process.
+/// the splash post-process. `volume`, when given, holds m / rho of every particle (as the pass would
+/// compute).
 void detectSurface(ParticleSet& p, const NeighborList& fluidNbrs, const NeighborList& boundaryNbrs,
-                   const BoundarySet& boundary);
+                   const BoundarySet& boundary, const Real* volume = nullptr);
 
 /// The CFL limit of refinement (cfl_limited_refinement): a particle that vorticity or velocity difference
 /// refines keeps a mass at which it allows kCflSpeedMargin times the step of the fine surface at its speed of
@@ -65,15 +66,18 @@ class LevelEstimator {
   void startDistance(ParticleSet& p, Real cap, Real hop, int& passes);
   /// min_j (phi_j + |x_ij|) over the neighbours of i, at most `cap` [m]
   static Real distanceAt(const ParticleSet& p, std::size_t i, const NeighborList& fluidNbrs, Real cap);
-  /// one Jacobi pass of the distance, with the kernel average of the raw omega and nu when they are given;
-  /// true when some phi changed
+  /// one Jacobi pass of the distance, with the kernel average of the raw omega and nu when they are given
+  /// (then with the volumes m / rho of m_volume); true when some phi changed
   bool distancePass(ParticleSet& p, const NeighborList& fluidNbrs, Real cap, const Real* rawOmega,
                     const Real* rawNu);
-  /// omega_i and nu_i: the kernel average of the raw values
-  static void smoothDynamicsAt(ParticleSet& p, std::size_t i, const NeighborList& fluidNbrs,
-                               const Real* rawOmega, const Real* rawNu);
+  /// distanceAt, and omega_i and nu_i as the kernel average of the raw values, in one pass over the
+  /// neighbours
+  static Real distanceAndDynamicsAt(ParticleSet& p, std::size_t i, const NeighborList& fluidNbrs, Real cap,
+                                    const Real* rawOmega, const Real* rawNu, const Real* volume);
 
   std::vector<Real> m_phiNext;
+  std::vector<Real> m_volume;              // m / rho of each particle, for one computation
+  std::vector<std::uint8_t> m_wasSurface;  // phi == 0 before the computation
   std::vector<Real> m_rawOmega;
   std::vector<Real> m_rawNu;
 };
