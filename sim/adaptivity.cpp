@@ -401,7 +401,7 @@ void Adaptivity::planSplit(const AdaptContext& ctx, SplitPlan& plan) const {
   // A signed distance is 1-Lipschitz outside the solid (where it is exact): a collider whose distance from
   // the parent exceeds the farthest child offset by the clearance cannot hold a child of any orientation.
   // One query per collider drops those; the others answer the K x n child queries (a mesh through its
-  // bounding-box tree: a few dozen of the propeller's 1,696 triangles a query).
+  // bounding-box tree, mostly without a distance: BallSdf::atLeast).
   double reach = 0.0;
   for (const Vec3d& offset : SplitTemplates::get().offsets(plan.n))
     reach = std::max(reach, offset.norm());

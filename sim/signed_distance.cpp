@@ -116,16 +116,12 @@ std::uint32_t findRoot(std::vector<std::uint32_t>& parent, std::uint32_t i) {
 // a leaf holds at most this many triangles
 constexpr std::uint32_t kTreeLeaf = 4;
 
-/// A bounding-box tree over `tris` (reordered in place into the leaves' order): each inner node splits its
+/// A bounding-box tree over `tris` (reordered in place into the leaves' order; `centroid` by triangle index):
+/// each inner node splits its
 /// triangles at the median of their centroids along the longest axis of the centroids' box (ties by index,
 /// so the tree depends on the mesh alone). Depth at most log2 of the count, plus one.
-void buildTree(const TriangleMesh& mesh, std::vector<MeshSdfData::TreeNode>& nodes,
-               std::vector<std::uint32_t>& tris) {
-  std::vector<Vec3d> centroid(mesh.triangles.size());
-  for (std::uint32_t t : tris) {
-    const auto& v = mesh.triangles[t];
-    centroid[t] = (mesh.vertices[v[0]] + mesh.vertices[v[1]] + mesh.vertices[v[2]]) / 3.0;
-  }
+void buildTree(const TriangleMesh& mesh, const std::vector<Vec3d>& centroid,
+               std::vector<MeshSdfData::TreeNode>& nodes, std::vector<std::uint32_t>& tris) {
   struct Task {
     std::uint32_t node, begin, end;
   };
@@ -203,6 +199,7 @@ std::shared_ptr<const MeshSdfData> buildMeshSdfData(const TriangleMesh& mesh) {
     parent[i] = weld.emplace(std::array<std::uint64_t, 3>{bitsOf(p.x()), bitsOf(p.y()), bitsOf(p.z())}, i)
                     .first->second;
   }
+  const std::vector<std::uint32_t> welded = parent;  // each vertex's representative position
   for (const auto& t : mesh.triangles) {
     const std::uint32_t r0 = findRoot(parent, t[0]);
     for (int k = 1; k < 3; ++k) {
@@ -224,10 +221,28 @@ std::shared_ptr<const MeshSdfData> buildMeshSdfData(const TriangleMesh& mesh) {
     for (std::uint32_t v : mesh.triangles[i])
       data->componentBounds[it->second].extend(mesh.vertices[v]);
   }
+  // Closed: every edge (between welded positions) shared by exactly two of the component's triangles.
+  for (const std::vector<std::uint32_t>& component : data->components) {
+    std::unordered_map<std::uint64_t, std::uint32_t> edges;
+    for (std::uint32_t t : component) {
+      for (int k = 0; k < 3; ++k) {
+        const std::uint32_t a = welded[mesh.triangles[t][k]], b = welded[mesh.triangles[t][(k + 1) % 3]];
+        ++edges[(std::uint64_t(std::min(a, b)) << 32) | std::max(a, b)];
+      }
+    }
+    const bool closed = std::all_of(edges.begin(), edges.end(), [](const auto& e) { return e.second == 2; });
+    data->closed.push_back(closed);
+    data->allClosed = data->allClosed && closed;
+  }
+  std::vector<Vec3d> centroids(nt);
+  for (std::size_t i = 0; i < nt; ++i) {
+    const auto& t = mesh.triangles[i];
+    centroids[i] = (mesh.vertices[t[0]] + mesh.vertices[t[1]] + mesh.vertices[t[2]]) / 3.0;
+  }
   for (const std::vector<std::uint32_t>& component : data->components) {
     data->trees.emplace_back();
     data->treeTriangles.push_back(component);
-    buildTree(mesh, data->trees.back(), data->treeTriangles.back());
+    buildTree(mesh, centroids, data->trees.back(), data->treeTriangles.back());
   }
   const Aabb box = mesh.bounds();
   data->tolerance = 1e-9 * (box.isEmpty() ? 1.0 : std::max(box.diagonal().norm(), 1e-30));
@@ -391,10 +406,11 @@ namespace {
 double meshSdf(const TriangleMesh& mesh, const MeshSdfData& data, const Vec3d& p) {
   double result = std::numeric_limits<double>::infinity();
   for (std::size_t k = 0; k < data.components.size(); ++k) {
-    // a component whose box lies farther than the distance so far (and than zero) holds no nearer point and
-    // not p: its distance is at least the box's, and the minimum stays
+    // a closed component whose box lies farther than max(the distance so far, 0) plus four tolerances holds
+    // no nearer point and not p: its distance is positive and at least the box's, and the minimum stays (an
+    // open one's sign is its pseudo-normal's, also behind it: always evaluated)
     const double floor = std::max(result, 0.0) + 4.0 * data.tolerance;
-    if (result < std::numeric_limits<double>::infinity() &&
+    if (data.closed[k] && result < std::numeric_limits<double>::infinity() &&
         boxDistance2(data.componentBounds[k].min(), data.componentBounds[k].max(), p) > floor * floor)
       continue;
     result = std::min(result, componentSdf(mesh, data, k, p));
@@ -481,7 +497,10 @@ double BallSdf::operator()(const Vec3d& localPoint) const {
 }
 
 bool BallSdf::atLeast(const Vec3d& localPoint, double c) const {
-  if (!m_data || !(m_centre > 0.0) || !(c > 0.0) || !localPoint.allFinite())
+  // (the argument below needs closed components, a finite centre outside them and a clearance well above the
+  // margins)
+  if (!m_data || !m_data->allClosed || !(m_centre > 0.0) || !std::isfinite(m_centre) ||
+      !m_centrePoint.allFinite() || !(c > 8.0 * m_data->tolerance) || !localPoint.allFinite())
     return (*this)(localPoint) >= c;
   // Every component's signed distance is 1-Lipschitz and positive at the centre. If no triangle lies within
   // R > |q - centre| - atCentre of q, none can vanish on the segment from the centre to q (there it is at

@@ -36,7 +36,9 @@ struct MeshSdfData {
     Vec3d lo = Vec3d::Zero(), hi = Vec3d::Zero();  ///< the box of the node's triangles
     std::uint32_t first = 0, count = 0;
   };
-  std::vector<std::vector<TreeNode>> trees;               ///< per component, the root first
+  std::vector<std::vector<TreeNode>> trees;  ///< per component, the root first
+  std::vector<bool> closed;  ///< per component: every edge shared by exactly two of its triangles
+  bool allClosed = true;     ///< every component closed
   std::vector<std::vector<std::uint32_t>> treeTriangles;  ///< per component, the leaves' triangles
   double tolerance = 0.0;  ///< closest points closer than this are one feature [m]
 };
@@ -61,9 +63,10 @@ class BallSdf {
   /// the signed distance at a point (collider frame) [m]: signedDistanceLocal's value
   double operator()(const Vec3d& localPoint) const;
   /// whether the signed distance at a point is at least `c` > 0: the same answer as (*this)(localPoint) >= c.
-  /// For a mesh outside which the centre lies, the triangles within reach of the point decide it mostly
-  /// without a distance: one nearer than c answers no; none within max(c, |point - centre| - atCentre())
-  /// answers yes (the signed distance is 1-Lipschitz, so the point is then outside, as the centre is).
+  /// For a mesh of closed components outside which the centre lies, the triangles within reach of the point
+  /// decide it mostly without a distance: one nearer than c answers no; none within max(c, |point - centre| -
+  /// atCentre()) answers yes (the signed distance is 1-Lipschitz, so the point is then outside, as the centre
+  /// is).
   bool atLeast(const Vec3d& localPoint, double c) const;
   /// a point of the surface nearest the centre (collider frame), for meshes; false for the other shapes. The
   /// signed distance at any point q is at most |q - surfacePoint| (exactly the distance outside, negative

@@ -414,6 +414,60 @@ TEST(SdfTest, MeshOverlappingComponentsFormAUnion) {
   }
 }
 
+TEST(SdfTest, AnOpenComponentIsNeverSkippedNorDecidedByReach) {
+  // A closed cube and, beside it, an open plate (one square, two triangles, facing +x). The plate's distance
+  // is signed by its pseudo-normal also behind it and beside it, where a closed component would be positive:
+  // the union's component skip and BallSdf::atLeast's answer from the triangles within reach hold for closed
+  // components only, and the values must stay those of a pass over every triangle of every component.
+  TriangleMesh mesh = TriangleMesh::loadObj(writeFile("cube.obj", kUnitCubeObj));
+  const auto base = static_cast<std::uint32_t>(mesh.vertices.size());
+  for (const Vec3d& v :
+       {Vec3d(2.0, -0.5, -0.5), Vec3d(2.0, 0.5, -0.5), Vec3d(2.0, 0.5, 0.5), Vec3d(2.0, -0.5, 0.5)})
+    mesh.vertices.push_back(v);
+  mesh.triangles.push_back({base, base + 1, base + 2});
+  mesh.triangles.push_back({base, base + 2, base + 3});
+  auto shared = std::make_shared<const TriangleMesh>(std::move(mesh));
+  const std::shared_ptr<const MeshSdfData> data = buildMeshSdfData(*shared);
+  ASSERT_EQ(data->components.size(), 2u);
+  EXPECT_TRUE(data->closed[0]);
+  EXPECT_FALSE(data->closed[1]);
+  EXPECT_FALSE(data->allClosed);
+  const ColliderDesc c = meshCollider(shared);
+  auto overAll = [&](const Vec3d& p) {
+    double best = std::numeric_limits<double>::infinity();
+    for (std::size_t k = 0; k < data->components.size(); ++k)
+      best = std::min(best, componentSdfOverAll(*shared, *data, k, p));
+    return best;
+  };
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 3.5);
+  int negativeBesideThePlate = 0;
+  for (int i = 0; i < 2000; ++i) {
+    const Vec3d p(u(rng), 0.6 * u(rng) - 0.5, 0.6 * u(rng) - 0.5);
+    const double exact = overAll(p);
+    ASSERT_EQ(signedDistanceLocal(c, p), exact) << p.transpose();
+    negativeBesideThePlate += exact < 0.0 && p.x() > 0.5;
+  }
+  EXPECT_GT(negativeBesideThePlate, 10);
+  // A parent in front of the plate and beside it, children around it: those behind the plate's plane are
+  // negative there although no triangle is near (an open component's sign is not continuous), which the
+  // answer from the triangles within reach alone would take for outside.
+  const Vec3d centre(2.5, 2.0, 0.0);
+  const BallSdf ball(c, centre);
+  ASSERT_GT(ball.atCentre(), 0.0);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  int behind = 0;
+  for (int i = 0; i < 500; ++i) {
+    const Vec3d q = centre + Vec3d(unit(rng), unit(rng), unit(rng));
+    const double exact = overAll(q);
+    behind += exact < 0.0;
+    for (const double cl : {0.05, 0.2, 0.6}) {
+      ASSERT_EQ(ball.atLeast(q, cl), exact >= cl) << q.transpose() << " clearance " << cl;
+    }
+  }
+  EXPECT_GT(behind, 50);
+}
+
 // --- the propeller asset
 // ------------------------------------------------------------------------------------------
 
