@@ -479,6 +479,13 @@ BallSdf::BallSdf(const ColliderDesc& collider, const Vec3d& localCentre)
   m_centre = std::numeric_limits<double>::infinity();
   double nearest2 = std::numeric_limits<double>::infinity();
   for (std::size_t k = 0; k < m_data->components.size(); ++k) {
+    // (as in meshSdf: a closed component whose box lies beyond the nearest surface so far holds neither a
+    // nearer surface point nor a smaller distance; the distance so far is at most the nearest's)
+    const double floor = std::sqrt(nearest2) + 4.0 * m_data->tolerance;
+    const Aabb& bounds = m_data->componentBounds[k];
+    if (m_data->closed[k] && nearest2 < std::numeric_limits<double>::infinity() &&
+        boxDistance2(bounds.min(), bounds.max(), localCentre) > floor * floor)
+      continue;
     Vec3d point = Vec3d::Zero();
     double d2 = std::numeric_limits<double>::infinity();
     m_centre = std::min(m_centre, treeSdf(*collider.mesh, *m_data, k, localCentre, &point, &d2));
