@@ -623,106 +623,10 @@ std::atomic<bool>& prefilterSetting() {
   static std::atomic<bool> on(true);
   return on;
 }
-std::atomic<bool>& parallelTransfersSetting() {
-  static std::atomic<bool> on(true);
-  return on;
-}
-// Fewer donors than this transfer in order: a round costs two parallel calls.
-constexpr std::size_t kParallelTransfersFrom = 16;
-// After this many rounds the donors still waiting transfer in order (a chain of donors, each next to the one
-// before, goes ahead one a round).
-constexpr std::size_t kMaxTransferRounds = 6;
-constexpr std::uint32_t kFree = std::numeric_limits<std::uint32_t>::max();
 }  // namespace
 
 bool setAdaptivityPrefilter(bool on) {
   return prefilterSetting().exchange(on);
-}
-
-bool setAdaptivityParallelTransfers(bool on) {
-  return parallelTransfersSetting().exchange(on);
-}
-
-template <class Op>
-std::size_t Adaptivity::transfersInOrder(const AdaptContext& ctx, const Op& op) {
-  // Deterministic reservations (Blelloch, Fineman, Gibbons and Shun 2012). A transfer reads and changes its
-  // donor and the donor's fluid neighbours only, so two donors whose such sets are disjoint give the same
-  // result in either order. Each round every waiting donor writes its index into the reservation of each
-  // particle of its set, keeping the lowest; a donor that holds all of its reservations has no waiting donor
-  // before it that shares a particle with it, and goes ahead (the donors that go ahead together are pairwise
-  // disjoint). The others wait for the next round. Any order of the waiting donors after the ones that went
-  // ahead is then the index order's result, so after kMaxTransferRounds the rest run in order.
-  const std::vector<std::uint32_t>& donors = m_selected;
-  m_rounds = 0;
-  std::size_t done = 0;
-  if (!parallelTransfersSetting().load() || donors.size() < kParallelTransfersFrom) {
-    for (const std::uint32_t i : donors)
-      done += op(i) ? 1 : 0;
-    return done;
-  }
-  const std::size_t n = ctx.fluid.size();
-  if (m_reserve.size < n) {
-    m_reserve.slots.reset(new std::atomic<std::uint32_t>[n]);
-    for (std::size_t i = 0; i < n; ++i)
-      m_reserve.slots[i].store(kFree, std::memory_order_relaxed);
-    m_reserve.size = n;
-  }
-  std::atomic<std::uint32_t>* reserve = m_reserve.slots.get();
-  const NeighborList& nbrs = ctx.fluidNbrs;
-  auto eachOfSet = [&](std::uint32_t d, auto&& f) {
-    f(d);
-    for (std::uint32_t k = nbrs.offsets[d]; k < nbrs.offsets[d + 1]; ++k)
-      f(nbrs.neighbor(d, k));
-  };
-  m_pending.assign(donors.begin(), donors.end());
-  using Range = tbb::blocked_range<std::size_t>;
-  constexpr std::size_t kGrain = 8;
-  while (!m_pending.empty() && m_rounds < kMaxTransferRounds) {
-    ++m_rounds;
-    const std::size_t count = m_pending.size();
-    parallelFor(Range(0, count, kGrain), [&](const Range& r) {
-      for (std::size_t k = r.begin(); k < r.end(); ++k) {
-        const std::uint32_t d = m_pending[k];
-        eachOfSet(d, [&](std::uint32_t x) {
-          std::uint32_t held = reserve[x].load(std::memory_order_relaxed);
-          while (d < held && !reserve[x].compare_exchange_weak(held, d, std::memory_order_relaxed)) {
-          }
-        });
-      }
-    });
-    m_wentAhead.resize(count);
-    std::atomic<std::size_t> succeeded{0};
-    parallelFor(Range(0, count, kGrain), [&](const Range& r) {
-      std::size_t local = 0;
-      for (std::size_t k = r.begin(); k < r.end(); ++k) {
-        const std::uint32_t d = m_pending[k];
-        bool holdsAll = true;
-        eachOfSet(d, [&](std::uint32_t x) {
-          holdsAll = holdsAll && reserve[x].load(std::memory_order_relaxed) == d;
-        });
-        if (holdsAll)
-          local += op(d) ? 1 : 0;
-        // a donor frees the reservations it holds (no other donor writes its index: a donor that checks a
-        // particle after it was freed sees kFree, not its own index, as it would have seen the holder's)
-        eachOfSet(d, [&](std::uint32_t x) {
-          std::uint32_t expected = d;
-          reserve[x].compare_exchange_strong(expected, kFree, std::memory_order_relaxed);
-        });
-        m_wentAhead[k] = holdsAll ? 1 : 0;
-      }
-      succeeded += local;
-    });
-    done += succeeded.load();
-    std::size_t waiting = 0;
-    for (std::size_t k = 0; k < count; ++k) {
-      if (!m_wentAhead[k])
-        m_pending[waiting++] = m_pending[k];
-    }
-    m_pending.resize(waiting);
-  }
-  for (const std::uint32_t i : m_pending)
-    done += op(i) ? 1 : 0;
-  return done;
 }
 
 double Adaptivity::capacityBound(const AdaptContext& ctx, std::size_t donor, bool all) {
@@ -744,9 +648,7 @@ double Adaptivity::capacityBound(const AdaptContext& ctx, std::size_t donor, boo
 
 bool Adaptivity::transferMass(const AdaptContext& ctx, std::size_t donor, double amount, bool all) {
   ParticleSet& p = ctx.fluid;
-  // (per thread: donors far enough apart transfer at once, see transfersInOrder)
-  thread_local std::vector<std::pair<Real, std::uint32_t>> candidates;
-  candidates.clear();
+  m_candidates.clear();
   double capacity = 0.0;
   const double rate = receiverRate(ctx.params);
   const Real below = receiverBelow(ctx.params, all);
@@ -758,21 +660,21 @@ bool Adaptivity::transferMass(const AdaptContext& ctx, std::size_t donor, double
     double room;
     if (!receiverRoom(p, donor, j, below, rate, distance, room))
       continue;
-    candidates.emplace_back(distance, j);
+    m_candidates.emplace_back(distance, j);
     capacity += room;
   }
   // (a merge whose receivers have room for all but round-off of the donor goes ahead: see below)
-  if (candidates.empty() || capacity <= 0.0 || (all && capacity < amount * (1.0 - 1e-9)))
+  if (m_candidates.empty() || capacity <= 0.0 || (all && capacity < amount * (1.0 - 1e-9)))
     return false;
   // nearest receivers first, each filled up to its optimal mass
-  std::sort(candidates.begin(), candidates.end());
+  std::sort(m_candidates.begin(), m_candidates.end());
   double left = amount;
   const double mDonor = p.m[donor];
   const Vec3d xDonor = p.x[donor].cast<double>();
   const Vec3d vDonor = p.v[donor].cast<double>();
   constexpr std::uint32_t kNoReceiver = ~std::uint32_t(0);
   std::uint32_t last = kNoReceiver;
-  for (const auto& [distance, j] : candidates) {
+  for (const auto& [distance, j] : m_candidates) {
     if (left <= 0.0)
       break;
     // Each receiver grows by at most `transfer_rate` of its mass per step: a particle whose mass jumps (say
@@ -841,12 +743,13 @@ AdaptivityStats Adaptivity::adapt(const AdaptContext& ctx, bool ignoreDelay, boo
   const Real shareAbove = Real(std::max(params.shareAbove, 1.0 + kTargetBand));
   // the split delay counts solver steps, whatever the adaptation period
   const std::uint32_t period = std::uint32_t(std::max(1, params.adaptationPeriod));
-  // One parallel pass finds the particles each operation below may take. The merges and shares then run with
-  // the result of index order (transfersInOrder), each changing only particles it locks, so a particle that
-  // is not locked keeps its mass, place and support, and a donor's capacity only loses terms as they proceed.
-  // A donor whose capacity at the start (its non-negative terms; floating-point sums of non-negative terms
-  // only grow with more terms) is already too small would fail without changing anything, so leaving it out
-  // gives the same result; the transfers visit only the others.
+  // One parallel pass finds the particles each operation below may take. The merges and shares then run in
+  // order, each changing only particles it locks, so a particle that is not locked keeps its mass, place and
+  // support, and a donor's capacity only loses terms as they proceed. A donor whose capacity at the start
+  // (its non-negative terms; floating-point sums of non-negative terms only grow with more terms) is already
+  // too small would fail without changing anything, so leaving it out gives the same result; the serial
+  // passes visit only the others. (The hand tank at r = 5 mm: the serial merges cost more at two threads
+  // than at one, as they read what the other core wrote.)
   const bool prefilter = prefilterSetting().load();
   std::atomic<std::size_t> leftOut{0};
   parallelFor(tbb::blocked_range<std::size_t>(0, n, 512), [&](const tbb::blocked_range<std::size_t>& r) {
@@ -884,11 +787,10 @@ AdaptivityStats Adaptivity::adapt(const AdaptContext& ctx, bool ignoreDelay, boo
 
   // merge n:(n-1): a too-light particle goes into its nearest light neighbours
   select(kMayMerge);
-  std::size_t rounds = 0;
-  stats.merges += transfersInOrder(ctx, [&](std::uint32_t i) {
-    return !m_locked[i] && ratio(i) < Real(params.mergeBelow) && transferMass(ctx, i, p.m[i], true);
-  });
-  rounds += m_rounds;
+  for (const std::uint32_t i : m_selected) {
+    if (!m_locked[i] && ratio(i) < Real(params.mergeBelow) && transferMass(ctx, i, p.m[i], true))
+      ++stats.merges;
+  }
 
   // split 1:n, orientations chosen in parallel on the state before any split of this step (one plan a task: a
   // step has a few plans of tens of microseconds each)
@@ -959,12 +861,12 @@ AdaptivityStats Adaptivity::adapt(const AdaptContext& ctx, bool ignoreDelay, boo
 
   // share (see above)
   select(kMayShare);
-  stats.redistributions += transfersInOrder(ctx, [&](std::uint32_t i) {
+  for (const std::uint32_t i : m_selected) {
     if (m_locked[i] || ratio(i) < shareAbove)
-      return false;
-    return transferMass(ctx, i, 0.5 * (double(p.m[i]) - double(p.mOpt[i])), false);
-  });
-  m_rounds += rounds;
+      continue;
+    if (transferMass(ctx, i, 0.5 * (double(p.m[i]) - double(p.mOpt[i])), false))
+      ++stats.redistributions;
+  }
 
   if (stats.merges + stats.splits > 0) {
     parallelSelect(p.size(), 4096, m_keep, [&](std::size_t i) { return i >= n || !m_removed[i]; });
@@ -1122,8 +1024,8 @@ void Adaptivity::ageSplitChildren(ParticleSet& p, const SimParams& params) {
 std::size_t Adaptivity::memoryBytes() const {
   return m_locked.capacity() + m_removed.capacity() + m_ops.capacity() * sizeof(ParticleOps) +
          m_plans.capacity() * sizeof(SplitPlan) + m_keep.capacity() * sizeof(std::uint32_t) +
-         m_kind.capacity() + m_pending.capacity() * sizeof(std::uint32_t) + m_wentAhead.capacity() +
-         m_reserve.size * sizeof(std::atomic<std::uint32_t>) + m_selected.capacity() * sizeof(std::uint32_t);
+         m_candidates.capacity() * sizeof(m_candidates[0]) + m_kind.capacity() +
+         m_selected.capacity() * sizeof(std::uint32_t);
 }
 
 }  // namespace fp::sim

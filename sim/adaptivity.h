@@ -5,10 +5,8 @@
 /// into neighbours, heavy ones share mass with light neighbours, and support radii follow the new masses over
 /// a few steps. Every operation conserves total mass and linear momentum to round-off.
 
-#include <atomic>
 #include <cstdint>
 #include <limits>
-#include <memory>
 #include <vector>
 
 #include "sim/boundary_set.h"
@@ -75,11 +73,6 @@ struct AdaptContext {
 /// the start of the step is already too small (on by default; the result is the same either way). Tests
 /// switch it off to compare. Returns the setting before.
 bool setAdaptivityPrefilter(bool on);
-/// Whether Adaptivity::adapt() runs its merges and shares on every thread (deterministic reservations: each
-/// round, every waiting donor reserves itself and its neighbours, and those that hold all their reservations
-/// go ahead together), or one after another in index order. The result is the same either way, bit for bit;
-/// on by default, tests switch it off to compare. Returns the setting before.
-bool setAdaptivityParallelTransfers(bool on);
 
 /// Split, merge, share and support blending, with their scratch arrays.
 class Adaptivity {
@@ -117,10 +110,8 @@ class Adaptivity {
 
   /// per particle, indexed as the particles were at the start of the last adapt() call: what it did there
   const std::vector<ParticleOps>& lastOperations() const { return m_ops; }
-  /// the merge and share donors the last adapt() left out before its transfers (setAdaptivityPrefilter)
+  /// the merge and share donors the last adapt() left out before its serial passes (setAdaptivityPrefilter)
   std::size_t lastDonorsLeftOut() const { return m_leftOut; }
-  /// the parallel rounds the last adapt()'s merges and shares took together (0: both ran in order)
-  std::size_t lastTransferRounds() const { return m_rounds; }
 
   /// Temporal blending (docs/method.md, Adaptivity, after Winchenbach et al. 2017): weight beta of the
   /// parent's value in a split child `age` solver steps after the split, 0.5 (1 - age / steps) while
@@ -161,10 +152,6 @@ class Adaptivity {
   /// the donor's capacity in transferMass() before any lock of this step, its negative terms left out (and
   /// receivers a hair beyond reach counted): an upper bound of its capacity at any later point of the step
   static double capacityBound(const AdaptContext& ctx, std::size_t donor, bool all);
-  /// op(i) for every donor i of m_selected, with the result of calling it in their (ascending) order; the
-  /// number of calls that returned true. op may read and change the donor and its fluid neighbours only.
-  template <class Op>
-  std::size_t transfersInOrder(const AdaptContext& ctx, const Op& op);
   void note(std::size_t i, OpKind kind) {
     m_ops[i].kinds = std::uint8_t(m_ops[i].kinds | kind);
     ++m_ops[i].count;
@@ -181,27 +168,7 @@ class Adaptivity {
   std::vector<std::uint8_t> m_kind;
   std::vector<std::uint32_t> m_selected;
   std::size_t m_leftOut = 0;
-  // transfersInOrder: per particle the lowest donor that reserved it this round (kFree between rounds), the
-  // donors still waiting, whether each went ahead
-  struct Reservations {
-    std::unique_ptr<std::atomic<std::uint32_t>[]> slots;
-    std::size_t size = 0;
-    Reservations() = default;
-    // a copy starts empty: the slots hold nothing between calls, and are made again on first use
-    Reservations(const Reservations&) {}
-    Reservations& operator=(const Reservations&) {
-      slots.reset();
-      size = 0;
-      return *this;
-    }
-    Reservations(Reservations&&) = default;
-    Reservations& operator=(Reservations&&) = default;
-    ~Reservations() = default;
-  };
-  Reservations m_reserve;
-  std::vector<std::uint32_t> m_pending;
-  std::vector<std::uint8_t> m_wentAhead;
-  std::size_t m_rounds = 0;
+  std::vector<std::pair<Real, std::uint32_t>> m_candidates;
 };
 
 }  // namespace fp::sim

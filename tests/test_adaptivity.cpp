@@ -311,51 +311,6 @@ TEST(AdaptivityTest, ThePrefilterOfDonorsChangesNothingWhateverTheThreadsSmall) 
   }
 }
 
-TEST(AdaptivityTest, TheParallelTransfersGiveTheSerialOrdersResultSmall) {
-  // adapt() runs its merges and shares in rounds of donors whose neighbourhoods are disjoint
-  // (setAdaptivityParallelTransfers). The same neighbourhoods adapted in index order and in rounds, at 1 and
-  // 2 threads, end bit for bit the same, with the same counts; and the rounds did meet donors that had to
-  // wait (more than one round), or the test would not test the ordering.
-  struct Restore {
-    ~Restore() { setAdaptivityParallelTransfers(true); }
-  } restore;
-  std::size_t mostRounds = 0;
-  for (int variant = 0; variant < 2; ++variant) {
-    for (unsigned seed = 1; seed <= 3; ++seed) {
-      std::vector<ParticleSet> results;
-      std::vector<AdaptivityStats> stats;
-      for (const bool parallel : {false, true}) {
-        for (const int threads : {1, 2}) {
-          const tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
-          setAdaptivityParallelTransfers(parallel);
-          Neighbourhood nb(seed);
-          if (variant == 1) {
-            nb.params.lightBelow = 0.55;
-            nb.params.mergeReceiversBelow = 0.55;
-            nb.params.transferRate = 0.025;
-          }
-          Adaptivity adaptivity;
-          stats.push_back(adaptivity.adapt(nb.context(0.5), true));
-          results.push_back(nb.p);
-          if (parallel)
-            mostRounds = std::max(mostRounds, adaptivity.lastTransferRounds());
-          else
-            EXPECT_EQ(adaptivity.lastTransferRounds(), 0u);
-        }
-      }
-      EXPECT_GT(stats[0].redistributions, 10u);
-      for (std::size_t k = 1; k < results.size(); ++k) {
-        EXPECT_TRUE(sameParticles(results[0], results[k]))
-            << "variant " << variant << " seed " << seed << " run " << k;
-        EXPECT_EQ(stats[k].merges, stats[0].merges);
-        EXPECT_EQ(stats[k].redistributions, stats[0].redistributions);
-        EXPECT_EQ(stats[k].splits, stats[0].splits);
-      }
-    }
-  }
-  EXPECT_GT(mostRounds, 2u);
-}
-
 TEST(ParallelTest, SelectGivesTheAscendingIndicesOfASerialFilterSmall) {
   // across block edges and for a single block, at 1 and 2 threads
   for (const std::size_t n : {std::size_t(0), std::size_t(1), std::size_t(37), std::size_t(4096),
