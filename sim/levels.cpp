@@ -149,8 +149,10 @@ void detectSurface(ParticleSet& p, const NeighborList& fluidNbrs, const Neighbor
 
 void LevelEstimator::surfaceAndRawDynamics(ParticleSet& p, const NeighborList& fluidNbrs,
                                            const NeighborList& boundaryNbrs, const BoundarySet& boundary) {
-  // One pass over the neighbours for the surface test, the raw SPH curl and the raw velocity difference.
+  // One pass over the neighbours for the surface test, the raw SPH curl and the raw velocity difference
+  // (the volumes m / rho from m_volume, filled by compute()).
   const std::size_t n = p.size();
+  const Real* volumes = m_volume.data();
   m_rawOmega.resize(n);
   m_rawNu.resize(n);
   parallelFor(Range(0, n, kGrain), [&](const Range& r) {
@@ -162,12 +164,12 @@ void LevelEstimator::surfaceAndRawDynamics(ParticleSet& p, const NeighborList& f
       Vec3 curl = Vec3::Zero();
       // the particle itself is in the denominator of nu (weight W(0)), so an isolated particle has nu = 0
       Real num = 0;
-      Real den = p.m[i] / p.rho[i] * CubicSpline::w0(p.H[i]);
+      Real den = volumes[i] * CubicSpline::w0(p.H[i]);
       for (std::uint32_t k = fluidNbrs.offsets[i]; k < fluidNbrs.offsets[i + 1]; ++k) {
         const std::uint32_t j = fluidNbrs.neighbor(i, k);
         const Vec3 xij = xi - p.x[j];
         const Real len = xij.norm();
-        const Real vj = p.m[j] / p.rho[j];
+        const Real vj = volumes[j];
         volume += vj;
         if (len > Real(0))
           away += (vj / len) * xij;

@@ -59,7 +59,7 @@ class LevelEstimator {
   std::size_t memoryBytes() const;
 
  private:
-  /// surface flags and the raw (unaveraged) omega and nu, in one pass over the neighbours
+  /// surface flags and the raw (unaveraged) omega and nu, in one pass over the neighbours (volumes: m_volume)
   void surfaceAndRawDynamics(ParticleSet& p, const NeighborList& fluidNbrs, const NeighborList& boundaryNbrs,
                              const BoundarySet& boundary);
   /// phi = 0 on the surface, the cap where unknown; sets the number of distance passes to run

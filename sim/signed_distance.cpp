@@ -117,9 +117,9 @@ std::uint32_t findRoot(std::vector<std::uint32_t>& parent, std::uint32_t i) {
 constexpr std::uint32_t kTreeLeaf = 4;
 
 /// A bounding-box tree over `tris` (reordered in place into the leaves' order; `centroid` by triangle index):
-/// each inner node splits its
-/// triangles at the median of their centroids along the longest axis of the centroids' box (ties by index,
-/// so the tree depends on the mesh alone). Depth at most log2 of the count, plus one.
+/// each inner node splits its triangles at the median of their centroids along the longest axis of the
+/// centroids' box (ties by index, so the tree depends on the mesh alone). Depth at most log2 of the count,
+/// plus one.
 void buildTree(const TriangleMesh& mesh, const std::vector<Vec3d>& centroid,
                std::vector<MeshSdfData::TreeNode>& nodes, std::vector<std::uint32_t>& tris) {
   struct Task {
@@ -268,6 +268,50 @@ double boxDistance2(const Vec3d& lo, const Vec3d& hi, const Vec3d& p) {
   return d.squaredNorm();
 }
 
+/// Whether closed component k lies farther than `floor` >= 0 from p (its box does): p is then outside it and
+/// its signed distance exceeds `floor`. An open component never does (its pseudo-normal signs it negative
+/// also behind it, far from any triangle).
+bool closedAndBeyond(const MeshSdfData& data, std::size_t k, const Vec3d& p, double floor) {
+  const Aabb& box = data.componentBounds[k];
+  return data.closed[k] && boxDistance2(box.min(), box.max(), p) > floor * floor;
+}
+
+/// Walks component k's tree nearer child first, skipping every node whose box lies farther from p than
+/// sqrt(limit2()) (read again at each node), and gives each triangle of the leaves it reaches to
+/// visit(triangle, closest point, squared distance), which returns false to stop the walk. False when
+/// stopped.
+template <class Limit, class Visit>
+bool walkTree(const TriangleMesh& mesh, const MeshSdfData& data, std::size_t k, const Vec3d& p,
+              const Limit& limit2, const Visit& visit) {
+  const std::vector<MeshSdfData::TreeNode>& nodes = data.trees[k];
+  const std::vector<std::uint32_t>& tris = data.treeTriangles[k];
+  // (depth <= log2(count) + 1 < 33: one pending sibling a level)
+  std::array<std::uint32_t, 64> stack;
+  std::size_t top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const MeshSdfData::TreeNode& node = nodes[stack[--top]];
+    if (boxDistance2(node.lo, node.hi, p) > limit2())
+      continue;
+    if (node.count > 0) {
+      for (std::uint32_t s = node.first; s < node.first + node.count; ++s) {
+        const auto& t = mesh.triangles[tris[s]];
+        const ClosestPoint c =
+            closestOnTriangle(p, mesh.vertices[t[0]], mesh.vertices[t[1]], mesh.vertices[t[2]]);
+        if (!visit(tris[s], c, (c.point - p).squaredNorm()))
+          return false;
+      }
+      continue;
+    }
+    const MeshSdfData::TreeNode& a = nodes[node.first];
+    const MeshSdfData::TreeNode& b = nodes[node.first + 1];
+    const bool aFirst = boxDistance2(a.lo, a.hi, p) <= boxDistance2(b.lo, b.hi, p);
+    stack[top++] = aFirst ? node.first + 1 : node.first;  // (the farther one waits)
+    stack[top++] = aFirst ? node.first : node.first + 1;
+  }
+  return true;
+}
+
 /// The signed distance from p given the triangles `met` (in the component's order, holding every triangle
 /// whose closest point is within the tolerance of the nearest one's): the distance to the first nearest,
 /// signed by the angle-weighted pseudo-normal of the met triangles sharing its closest point.
@@ -285,8 +329,6 @@ double treeSdf(const TriangleMesh& mesh, const MeshSdfData& data, std::size_t k,
                Vec3d* nearest = nullptr, double* nearest2 = nullptr) {
   if (!p.allFinite())
     return std::numeric_limits<double>::infinity();
-  const std::vector<MeshSdfData::TreeNode>& nodes = data.trees[k];
-  const std::vector<std::uint32_t>& tris = data.treeTriangles[k];
   thread_local std::vector<Met> met;
   met.clear();
   double best2 = std::numeric_limits<double>::infinity();
@@ -294,31 +336,11 @@ double treeSdf(const TriangleMesh& mesh, const MeshSdfData& data, std::size_t k,
     const double limit = std::sqrt(best2) + 2.0 * data.tolerance;
     return limit * limit;
   };
-  // (depth <= log2(count) + 1 < 33: one pending sibling a level)
-  std::array<std::uint32_t, 64> stack;
-  std::size_t top = 0;
-  stack[top++] = 0;
-  while (top > 0) {
-    const MeshSdfData::TreeNode& node = nodes[stack[--top]];
-    if (boxDistance2(node.lo, node.hi, p) > limit2())
-      continue;
-    if (node.count > 0) {
-      for (std::uint32_t s = node.first; s < node.first + node.count; ++s) {
-        const auto& t = mesh.triangles[tris[s]];
-        const ClosestPoint c =
-            closestOnTriangle(p, mesh.vertices[t[0]], mesh.vertices[t[1]], mesh.vertices[t[2]]);
-        const double d2 = (c.point - p).squaredNorm();
-        best2 = std::min(best2, d2);
-        met.push_back({tris[s], c, d2});
-      }
-      continue;
-    }
-    const MeshSdfData::TreeNode& a = nodes[node.first];
-    const MeshSdfData::TreeNode& b = nodes[node.first + 1];
-    const bool aFirst = boxDistance2(a.lo, a.hi, p) <= boxDistance2(b.lo, b.hi, p);
-    stack[top++] = aFirst ? node.first + 1 : node.first;  // (the farther one waits)
-    stack[top++] = aFirst ? node.first : node.first + 1;
-  }
+  walkTree(mesh, data, k, p, limit2, [&](std::uint32_t tri, const ClosestPoint& c, double d2) {
+    best2 = std::min(best2, d2);
+    met.push_back({tri, c, d2});
+    return true;
+  });
   // the triangles that can matter, in the component's order
   const double keep2 = limit2();
   met.erase(std::remove_if(met.begin(), met.end(), [&](const Met& m) { return !(m.d2 <= keep2); }),
@@ -406,12 +428,9 @@ namespace {
 double meshSdf(const TriangleMesh& mesh, const MeshSdfData& data, const Vec3d& p) {
   double result = std::numeric_limits<double>::infinity();
   for (std::size_t k = 0; k < data.components.size(); ++k) {
-    // a closed component whose box lies farther than max(the distance so far, 0) plus four tolerances holds
-    // no nearer point and not p: its distance is positive and at least the box's, and the minimum stays (an
-    // open one's sign is its pseudo-normal's, also behind it: always evaluated)
-    const double floor = std::max(result, 0.0) + 4.0 * data.tolerance;
-    if (data.closed[k] && result < std::numeric_limits<double>::infinity() &&
-        boxDistance2(data.componentBounds[k].min(), data.componentBounds[k].max(), p) > floor * floor)
+    // a closed component farther than max(the distance so far, 0) plus four tolerances leaves the minimum
+    if (result < std::numeric_limits<double>::infinity() &&
+        closedAndBeyond(data, k, p, std::max(result, 0.0) + 4.0 * data.tolerance))
       continue;
     result = std::min(result, componentSdf(mesh, data, k, p));
   }
@@ -481,10 +500,8 @@ BallSdf::BallSdf(const ColliderDesc& collider, const Vec3d& localCentre)
   for (std::size_t k = 0; k < m_data->components.size(); ++k) {
     // (as in meshSdf: a closed component whose box lies beyond the nearest surface so far holds neither a
     // nearer surface point nor a smaller distance; the distance so far is at most the nearest's)
-    const double floor = std::sqrt(nearest2) + 4.0 * m_data->tolerance;
-    const Aabb& bounds = m_data->componentBounds[k];
-    if (m_data->closed[k] && nearest2 < std::numeric_limits<double>::infinity() &&
-        boxDistance2(bounds.min(), bounds.max(), localCentre) > floor * floor)
+    if (nearest2 < std::numeric_limits<double>::infinity() &&
+        closedAndBeyond(*m_data, k, localCentre, std::sqrt(nearest2) + 4.0 * m_data->tolerance))
       continue;
     Vec3d point = Vec3d::Zero();
     double d2 = std::numeric_limits<double>::infinity();
@@ -518,36 +535,18 @@ bool BallSdf::atLeast(const Vec3d& localPoint, double c) const {
   const double reach = std::max(c, (localPoint - m_centrePoint).norm() - m_centre) + 4.0 * tol;
   const double reach2 = reach * reach;
   const double below2 = (c - 4.0 * tol) * (c - 4.0 * tol);
-  const TriangleMesh& mesh = *m_collider->mesh;
   bool undecided = false;
   for (std::size_t k = 0; k < m_data->components.size(); ++k) {
-    const Aabb& bounds = m_data->componentBounds[k];
-    if (boxDistance2(bounds.min(), bounds.max(), localPoint) > reach2)
+    if (closedAndBeyond(*m_data, k, localPoint, reach))
       continue;
-    const std::vector<MeshSdfData::TreeNode>& nodes = m_data->trees[k];
-    const std::vector<std::uint32_t>& tris = m_data->treeTriangles[k];
-    std::array<std::uint32_t, 64> stack;
-    std::size_t top = 0;
-    stack[top++] = 0;
-    while (top > 0) {
-      const MeshSdfData::TreeNode& node = nodes[stack[--top]];
-      if (boxDistance2(node.lo, node.hi, localPoint) > reach2)
-        continue;
-      if (node.count == 0) {
-        stack[top++] = node.first;
-        stack[top++] = node.first + 1;
-        continue;
-      }
-      for (std::uint32_t s = node.first; s < node.first + node.count; ++s) {
-        const auto& t = mesh.triangles[tris[s]];
-        const ClosestPoint cp =
-            closestOnTriangle(localPoint, mesh.vertices[t[0]], mesh.vertices[t[1]], mesh.vertices[t[2]]);
-        const double d2 = (cp.point - localPoint).squaredNorm();
-        if (d2 < below2)
-          return false;
-        undecided = undecided || d2 <= reach2;
-      }
-    }
+    const bool nearerThanC = !walkTree(
+        *m_collider->mesh, *m_data, k, localPoint, [reach2] { return reach2; },
+        [&](std::uint32_t, const ClosestPoint&, double d2) {
+          undecided = undecided || d2 <= reach2;
+          return !(d2 < below2);  // (a triangle nearer than c: no)
+        });
+    if (nearerThanC)
+      return false;
   }
   return undecided ? (*this)(localPoint) >= c : true;
 }
