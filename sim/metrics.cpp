@@ -72,6 +72,27 @@ DensityErrorMeans densityErrorMeans(const ParticleSet& p, double restDensity) {
   return out;
 }
 
+double surgeFront(const ParticleSet& p, double massBeyond) {
+  if (p.size() == 0)
+    return 0.0;
+  std::vector<std::pair<double, double>> reach(p.size());  // (x + r, m), farthest first
+  double total = 0.0;
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    reach[i] = {double(p.x[i].x()) + 0.25 * double(p.H[i]), double(p.m[i])};
+    total += double(p.m[i]);
+  }
+  std::stable_sort(reach.begin(), reach.end(),
+                   [](const auto& a, const auto& b) { return a.first > b.first; });
+  const double target = massBeyond * total;
+  double beyond = 0.0;
+  for (const auto& [x, m] : reach) {
+    beyond += m;
+    if (beyond > target)
+      return x;
+  }
+  return reach.back().first;
+}
+
 TimeStepHeadroom timeStepHeadroom(const ParticleSet& p, double dt, double cflFactor, double dtMax) {
   TimeStepHeadroom out;
   if (p.size() == 0 || !(dt > 0.0))

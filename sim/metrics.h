@@ -1,5 +1,6 @@
 #pragma once
-/// Measures of a simulation state used by the paper's experiment: how high the water reaches.
+/// Measures of a simulation state used by the paper's experiment and the physics tests: how high the water
+/// reaches, how far a surge runs, how compressed the water is, what time steps per particle could save.
 
 #include "sim/particle_set.h"
 #include "sim/splash.h"
@@ -12,6 +13,13 @@ namespace fp::sim {
 /// particle's mass divided by `perSource` (n_splash). 0 for no particles.
 double heightPercentile(const ParticleSet& p, double fraction, const SplashParticles* splash = nullptr,
                         int perSource = 1);
+
+/// The surge front of a dam break along +x [m]: the reach `x_i + r_i` (r_i = H_i / 4, the particle's own
+/// radius) of the particle at which the mass reaching at least as far first exceeds `massBeyond` of the
+/// fluid's mass, particles taken from the farthest. `massBeyond = 0` gives the farthest particle; a small
+/// share (e.g. 0.001) leaves out the few particles that a toe throws ahead of the water, whatever their
+/// sizes. Ties are taken in index order. 0 for no particles.
+double surgeFront(const ParticleSet& p, double massBeyond);
 
 /// Mean density errors of a state, from the densities of its last step.
 struct DensityErrorMeans {

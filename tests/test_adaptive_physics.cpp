@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "engine/scene_loader.h"
+#include "sim/metrics.h"
 #include "sim/simulation.h"
 #include "tests/scene_fixtures.h"
 
@@ -305,48 +306,64 @@ TEST(AdaptivePhysicsTest, DamBreakSmallLongRunBoundedAndConserving) {
 }
 
 TEST(AdaptivePhysicsTest, DamBreakSurgeFrontFollowsUniformHigh) {
-  // The front of the collapsing column (its farthest particle from the back wall, at its own radius) over the
-  // first 0.3 s, in fluidplaying and in uniform-high, both settled before t = 0 (initial_relaxation). The
-  // tank is long enough that the front does not reach the far wall. Measured: fluidplaying leads by 5.6 % at
-  // most (at 0.1 s) and is within 2.1 % from 0.2 s on (0.0 % at 0.3 s). With uniform-high started from the
-  // unsettled lattice, as before session 16, it stood still for some 30 ms and fluidplaying led it by 8.1 %;
-  // with mass_ratio 8 the lead is 2.4 %, with 1 none: the rest is the coarse interior's.
+  // The front of the collapsing column over the first 0.3 s, in fluidplaying and in uniform-high, both
+  // settled before t = 0 (initial_relaxation); the tank is long enough that the front does not reach the far
+  // wall. Two fronts (sim::surgeFront): the water's, beyond which lies 0.1 % of the mass (2.4 fine particles'
+  // worth here), and the farthest particle's. Measured (session 30): the water's front leads uniform-high's
+  // by 4.4 % at most (at 0.1 s) and by 3.5 % at most from 0.2 s on; the farthest particle leads by 5.9 % at
+  // 0.1 s (two fine particles 2 cm ahead of the toe, 6 mm ahead of the next: uniform-high's toe is within 3
+  // mm) and by 1.2 % from 0.2 s on. Every seed of the split orientations gives the same 5.9 % and 4.4 %: the
+  // lead is made before the first splits, by the merges. Without any merge the farthest particle leads by 2.6
+  // %, without those of the settling 8.1 % (the run then makes them), without those of the run 5.3 %. A
+  // taller column does not explain it: uniform-high with one more layer (16 mm taller) has the same front to
+  // 0.2 s. With uniform-high started from the unsettled lattice, as before session 16, it stood still for
+  // some 30 ms and fluidplaying led it by 8.1 %.
   SceneDesc scene = tankScene(Vec3d(0.6, 0.2, 0.1), Vec3d(-0.6, 0.0, -0.1), Vec3d(-0.35, 0.3, 0.1), 0.008);
+  constexpr double kWaterBeyond = 0.001;
+  struct Fronts {
+    std::vector<double> water, farthest;  // from the back wall, once every 25 ms
+  };
   auto fronts = [&](AdaptivityMode mode) {
     SceneDesc s = scene;
     s.mode = mode;
     Simulation sim(s);
-    std::vector<double> out;
+    Fronts out;
     for (int frame = 1; frame <= 12; ++frame) {
       while (sim.time() < 0.025 * frame)
         sim.step();
-      const ParticleSet& p = sim.particles();
-      double front = -0.6;
-      for (std::size_t i = 0; i < p.size(); ++i)
-        front = std::max(front, double(p.x[i].x()) + double(p.H[i]) / 4.0);
-      out.push_back(front + 0.6);
+      out.water.push_back(surgeFront(sim.particles(), kWaterBeyond) + 0.6);
+      out.farthest.push_back(surgeFront(sim.particles(), 0.0) + 0.6);
     }
     return out;
   };
-  const std::vector<double> high = fronts(AdaptivityMode::UniformHigh);
-  const std::vector<double> adaptive = fronts(AdaptivityMode::FluidPlaying);
-  double worst = 0.0;
-  for (std::size_t k = 0; k < high.size(); ++k) {
-    worst = std::max(worst, std::abs(adaptive[k] - high[k]) / high[k]);
-    std::printf("  t = %.3f s: front %.4f m (fluidplaying) against %.4f m (uniform-high)\n",
-                0.025 * double(k + 1), adaptive[k], high[k]);
-  }
-  double late = 0.0;  // from 0.2 s on
-  for (std::size_t k = 7; k < high.size(); ++k)
-    late = std::max(late, std::abs(adaptive[k] - high[k]) / high[k]);
+  const Fronts high = fronts(AdaptivityMode::UniformHigh);
+  const Fronts adaptive = fronts(AdaptivityMode::FluidPlaying);
+  // the largest relative difference over the frames from `first` on
+  auto lead = [](const std::vector<double>& a, const std::vector<double>& h, std::size_t first) {
+    double worst = 0.0;
+    for (std::size_t k = first; k < h.size(); ++k)
+      worst = std::max(worst, std::abs(a[k] - h[k]) / h[k]);
+    return worst;
+  };
+  for (std::size_t k = 0; k < high.water.size(); ++k)
+    std::printf(
+        "  t = %.3f s: water's front %.4f m against %.4f m, farthest particle %.4f m against %.4f m\n",
+        0.025 * double(k + 1), adaptive.water[k], high.water[k], adaptive.farthest[k], high.farthest[k]);
+  const double water = lead(adaptive.water, high.water, 0);
+  const double waterLate = lead(adaptive.water, high.water, 7);  // from 0.2 s on
+  const double farthest = lead(adaptive.farthest, high.farthest, 0);
+  const double farthestLate = lead(adaptive.farthest, high.farthest, 7);
   std::printf(
-      "surge front, fluidplaying against uniform-high over 0.3 s: largest difference %.1f %%, %.1f %% from "
-      "0.2 s on (at 0.3 s: %.3f m against %.3f m)\n",
-      100.0 * worst, 100.0 * late, adaptive.back(), high.back());
-  EXPECT_LT(worst, 0.07);
-  EXPECT_LT(late, 0.03);
+      "surge front, fluidplaying against uniform-high over 0.3 s: the water's (%.1f %% of the mass beyond) "
+      "%.1f %% at most, %.1f %% from 0.2 s on; the farthest particle's %.1f %%, %.1f %% from 0.2 s on\n",
+      100.0 * kWaterBeyond, 100.0 * water, 100.0 * waterLate, 100.0 * farthest, 100.0 * farthestLate);
+  // issue 13's goal: within 5 % over the first 0.3 s
+  EXPECT_LT(water, 0.05);
+  EXPECT_LT(waterLate, 0.045);
+  EXPECT_LT(farthest, 0.07);
+  EXPECT_LT(farthestLate, 0.03);
   // the front has moved: the column collapsed
-  EXPECT_GT(high.back(), 1.5 * high.front());
+  EXPECT_GT(high.water.back(), 1.5 * high.water.front());
 }
 
 TEST(AdaptivePhysicsTest, FluidBlocksKeepTheirInitialVelocityThroughTheSettlingInEveryMode) {

@@ -1402,6 +1402,31 @@ TEST(MetricsTest, HeightPercentileIsWeightedByMassSmall) {
   EXPECT_EQ(heightPercentile(ParticleSet(), 0.999), 0.0);
 }
 
+TEST(MetricsTest, SurgeFrontLeavesOutTheMassThrownAheadSmall) {
+  ParticleSet p;
+  // 1000 equal particles at x = 0, 1, ..., 999 mm, radius 10 mm (H = 40 mm): reaches 10 ... 1009 mm
+  for (int k = 0; k < 1000; ++k)
+    p.add(Vec3(Real(k) * 1e-3f, 0, 0), Vec3::Zero(), 1.0f, 0.04f, 1000.0f);
+  EXPECT_NEAR(surgeFront(p, 0.0), 1.009, 1e-6);     // the farthest particle, at its own radius
+  EXPECT_NEAR(surgeFront(p, 0.001), 1.008, 1e-6);   // one particle's mass (0.1 %) beyond: the second
+  EXPECT_NEAR(surgeFront(p, 0.0095), 1.000, 1e-6);  // 9.5 particles beyond: the tenth farthest
+  // two particles thrown far ahead move the farthest reach, not the front of 0.5 % of the water
+  p.add(Vec3(1.5f, 0, 0), Vec3::Zero(), 1.0f, 0.04f, 1000.0f);
+  p.add(Vec3(1.4f, 0, 0), Vec3::Zero(), 1.0f, 0.04f, 1000.0f);
+  EXPECT_NEAR(surgeFront(p, 0.0), 1.51, 1e-6);
+  EXPECT_NEAR(surgeFront(p, 0.005), 1.006, 1e-6);  // 5.01 particles beyond: the two and the top four
+  // weighted by mass: one heavy particle of 100 (H = 40 mm * 100^(1/3)) reaching farthest holds the front
+  // for every share below its 100 / 1102 of the water
+  p.add(Vec3(1.2f, 0, 0), Vec3::Zero(), 100.0f, 0.04f * std::cbrt(100.0f), 1000.0f);
+  const double heavyReach = 1.2 + 0.01 * std::cbrt(100.0);
+  EXPECT_NEAR(surgeFront(p, 0.0), 1.51, 1e-6);
+  EXPECT_NEAR(surgeFront(p, 0.05), heavyReach, 1e-6);
+  EXPECT_NEAR(surgeFront(p, 0.09), heavyReach, 1e-6);
+  EXPECT_NEAR(surgeFront(p, 0.093), 1.009,
+              1e-6);  // 102.5 of 1102 beyond: the two, the heavy one and one more
+  EXPECT_EQ(surgeFront(ParticleSet(), 0.001), 0.0);
+}
+
 TEST(MetricsTest, TimeStepHeadroomCountsEachParticlesPowerOfTwoLevel) {
   // cfl_factor 0.4, H = 0.04 m: a particle's own step is 0.4 * 0.02 / speed = 0.008 / speed
   const double dt = 1e-3, cfl = 0.4, dtMax = 5e-3;
