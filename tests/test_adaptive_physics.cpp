@@ -308,16 +308,16 @@ TEST(AdaptivePhysicsTest, DamBreakSmallLongRunBoundedAndConserving) {
 TEST(AdaptivePhysicsTest, DamBreakSurgeFrontFollowsUniformHigh) {
   // The front of the collapsing column over the first 0.3 s, in fluidplaying and in uniform-high, both
   // settled before t = 0 (initial_relaxation); the tank is long enough that the front does not reach the far
-  // wall. Two fronts (sim::surgeFront): the water's, beyond which lies 0.1 % of the mass (2.4 fine particles'
-  // worth here), and the farthest particle's. Measured (session 30): the water's front leads uniform-high's
-  // by 4.4 % at most (at 0.1 s) and by 3.5 % at most from 0.2 s on; the farthest particle leads by 5.9 % at
-  // 0.1 s (two fine particles 2 cm ahead of the toe, 6 mm ahead of the next: uniform-high's toe is within 3
-  // mm) and by 1.2 % from 0.2 s on. Every seed of the split orientations gives the same 5.9 % and 4.4 %: the
-  // lead is made before the first splits, by the merges. Without any merge the farthest particle leads by 2.6
-  // %, without those of the settling 8.1 % (the run then makes them), without those of the run 5.3 %. A
-  // taller column does not explain it: uniform-high with one more layer (16 mm taller) has the same front to
-  // 0.2 s. With uniform-high started from the unsettled lattice, as before session 16, it stood still for
-  // some 30 ms and fluidplaying led it by 8.1 %.
+  // wall. Two fronts (sim::surgeFront): the water's, beyond which lies 0.1 % of the mass (2.4 fine
+  // particles' worth here), and the farthest particle's. Measured (session 30): the water's front leads
+  // uniform-high's by 4.4 % at most (at 0.1 s), by 3.5 % at most from 0.2 s on. The farthest particle leads
+  // by 5.9 % at 0.1 s, by 1.2 % from 0.2 s on: two fine particles 2 cm ahead of uniform-high's toe and 6 mm
+  // ahead of their own, where uniform-high's first eight lie within 3 mm. Every seed of the split
+  // orientations gives the same figures (no split happens before 0.1 s); the merges make the lead. Without
+  // any merge the farthest particle leads by 2.6 %, without the settling's by 8.1 % (the run makes them
+  // instead), without the run's by 5.3 %. The column's height does not explain it: uniform-high one layer
+  // (16 mm) taller has the same front to 0.2 s. With uniform-high started from the unsettled lattice, as
+  // before session 16, it stood still for some 30 ms and fluidplaying led it by 8.1 %.
   SceneDesc scene = tankScene(Vec3d(0.6, 0.2, 0.1), Vec3d(-0.6, 0.0, -0.1), Vec3d(-0.35, 0.3, 0.1), 0.008);
   constexpr double kWaterBeyond = 0.001;
   struct Fronts {
