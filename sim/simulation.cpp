@@ -904,8 +904,12 @@ void Simulation::step() {
   st.times.divergence = seconds(t3, t4);
 
   m_solver.nonPressureForces(ctx, m_dt);
-  for (std::uint32_t i : m_held)
-    m_fluid.a[i].setZero();  // a held particle drifts (its gravity comes with the next step)
+  // a held particle drifts (its gravity comes with the next step)
+  parallelFor(tbb::blocked_range<std::size_t>(0, m_held.size(), 4096),
+              [&](const tbb::blocked_range<std::size_t>& r) {
+                for (std::size_t k = r.begin(); k < r.end(); ++k)
+                  m_fluid.a[m_held[k]].setZero();
+              });
   auto t5 = Clock::now();
   st.times.viscosity = seconds(t4, t5);
 
