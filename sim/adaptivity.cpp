@@ -910,7 +910,7 @@ struct BlendGroups {
 
 BlendGroups blendGroups(const ParticleSet& p, int steps) {
   BlendGroups g;
-  // (ascending, in parallel from 4,096 particles: the same list whatever the thread count)
+  // (ascending, in parallel above 4,096 particles: the same list whatever the thread count)
   const std::uint32_t age = std::uint32_t(std::max(steps, 0));
   parallelSelect(p.size(), 4096, g.index,
                  [&](std::size_t i) { return p.parentId[i] != kNoParent && p.splitAge[i] < age; });

@@ -18,7 +18,8 @@ double heightPercentile(const ParticleSet& p, double fraction, const SplashParti
 /// radius) of the particle at which the mass reaching at least as far first exceeds `massBeyond` of the
 /// fluid's mass, particles taken from the farthest. `massBeyond = 0` gives the farthest particle; a small
 /// share (e.g. 0.001) leaves out the few particles that a toe throws ahead of the water, whatever their
-/// sizes. Ties are taken in index order. 0 for no particles.
+/// sizes. For `massBeyond` in [0, 1); a share of 1 or more gives the nearest particle's reach, a negative one
+/// the farthest's. 0 for no particles.
 double surgeFront(const ParticleSet& p, double massBeyond);
 
 /// Mean density errors of a state, from the densities of its last step.

@@ -313,11 +313,11 @@ TEST(AdaptivePhysicsTest, DamBreakSurgeFrontFollowsUniformHigh) {
   // uniform-high's by 4.4 % at most (at 0.1 s), by 3.5 % at most from 0.2 s on. The farthest particle leads
   // by 5.9 % at 0.1 s, by 1.2 % from 0.2 s on: two fine particles 2 cm ahead of uniform-high's toe and 6 mm
   // ahead of their own, where uniform-high's first eight lie within 3 mm. Every seed of the split
-  // orientations gives the same figures (no split happens before 0.1 s); the merges make the lead. Without
-  // any merge the farthest particle leads by 2.6 %, without the settling's by 8.1 % (the run makes them
-  // instead), without the run's by 5.3 %. The column's height does not explain it: uniform-high one layer
-  // (16 mm) taller has the same front to 0.2 s. With uniform-high started from the unsettled lattice, as
-  // before session 16, it stood still for some 30 ms and fluidplaying led it by 8.1 %.
+  // orientations gives the same figures at 0.1 s (no split happens before it); the merges make the lead.
+  // Without any merge the farthest particle leads by 2.6 %, without the settling's by 8.1 % (the run makes
+  // them instead), without the run's by 5.3 %. The column's height does not explain it: uniform-high one
+  // layer (16 mm) taller has the same front to 0.2 s. With uniform-high started from the unsettled lattice,
+  // as before session 16, it stood still for some 30 ms and fluidplaying led it by 8.1 %.
   SceneDesc scene = tankScene(Vec3d(0.6, 0.2, 0.1), Vec3d(-0.6, 0.0, -0.1), Vec3d(-0.35, 0.3, 0.1), 0.008);
   constexpr double kWaterBeyond = 0.001;
   struct Fronts {

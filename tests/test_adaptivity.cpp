@@ -1415,8 +1415,8 @@ TEST(MetricsTest, SurgeFrontLeavesOutTheMassThrownAheadSmall) {
   p.add(Vec3(1.4f, 0, 0), Vec3::Zero(), 1.0f, 0.04f, 1000.0f);
   EXPECT_NEAR(surgeFront(p, 0.0), 1.51, 1e-6);
   EXPECT_NEAR(surgeFront(p, 0.005), 1.006, 1e-6);  // 5.01 particles beyond: the two and the top four
-  // weighted by mass: one heavy particle of 100 (H = 40 mm * 100^(1/3)) reaching farthest holds the front
-  // for every share below its 100 / 1102 of the water
+  // weighted by mass: one heavy particle of 100 (H = 40 mm * 100^(1/3)), behind the two thrown ahead, is the
+  // front for every share from theirs (2 / 1102) up to theirs and its own (102 / 1102)
   p.add(Vec3(1.2f, 0, 0), Vec3::Zero(), 100.0f, 0.04f * std::cbrt(100.0f), 1000.0f);
   const double heavyReach = 1.2 + 0.01 * std::cbrt(100.0);
   EXPECT_NEAR(surgeFront(p, 0.0), 1.51, 1e-6);
