@@ -8,6 +8,45 @@
 
 namespace fp::sim {
 
+namespace {
+
+/// In ascending order of value, the first (value, weight) of `vw` at which the weight so far reaches `target`
+/// (exceeds it, when `strictly`), by weighted selection instead of a full sort (the headless run measures
+/// heights twice a frame); the largest value when round-off keeps the sum short of it. Reorders `vw`, which
+/// must not be empty. Values that tie are one value, whatever their order.
+double weightedQuantile(std::vector<std::pair<double, double>>& vw, double target, bool strictly) {
+  auto reaches = [&](double weight) { return strictly ? weight > target : weight >= target; };
+  // `below` is the weight of everything before [lo, hi) and does not reach the target
+  auto lo = vw.begin();
+  auto hi = vw.end();
+  double below = 0.0;
+  while (hi - lo > 32) {
+    const auto mid = lo + (hi - lo) / 2;
+    std::nth_element(lo, mid, hi);
+    double left = 0.0;
+    for (auto it = lo; it != mid; ++it)
+      left += it->second;
+    if (reaches(below + left)) {
+      hi = mid;
+      continue;
+    }
+    below += left;
+    if (reaches(below + mid->second))
+      return mid->first;
+    below += mid->second;
+    lo = mid + 1;
+  }
+  std::sort(lo, hi);
+  for (auto it = lo; it != hi; ++it) {
+    below += it->second;
+    if (reaches(below))
+      return it->first;
+  }
+  return std::max_element(vw.begin(), vw.end())->first;
+}
+
+}  // namespace
+
 double heightPercentile(const ParticleSet& p, double fraction, const SplashParticles* splash, int perSource) {
   std::vector<std::pair<double, double>> yw;
   yw.reserve(p.size() + (splash ? splash->size() : 0));
@@ -23,37 +62,7 @@ double heightPercentile(const ParticleSet& p, double fraction, const SplashParti
   double total = 0.0;
   for (const auto& [y, w] : yw)
     total += w;
-  const double target = fraction * total;
-  // The first (y, w) in ascending order at which the weight so far reaches the target, by weighted
-  // selection instead of a full sort (the headless run measures it twice a frame): `below` is the weight of
-  // everything before [lo, hi) and stays under the target.
-  auto lo = yw.begin();
-  auto hi = yw.end();
-  double below = 0.0;
-  while (hi - lo > 32) {
-    const auto mid = lo + (hi - lo) / 2;
-    std::nth_element(lo, mid, hi);
-    double left = 0.0;
-    for (auto it = lo; it != mid; ++it)
-      left += it->second;
-    if (below + left >= target) {
-      hi = mid;
-      continue;
-    }
-    below += left;
-    if (below + mid->second >= target)
-      return mid->first;
-    below += mid->second;
-    lo = mid + 1;
-  }
-  std::sort(lo, hi);
-  for (auto it = lo; it != hi; ++it) {
-    below += it->second;
-    if (below >= target)
-      return it->first;
-  }
-  // round-off kept the sum under the target: the largest height left
-  return std::max_element(yw.begin(), yw.end())->first;
+  return weightedQuantile(yw, fraction * total, false);
 }
 
 DensityErrorMeans densityErrorMeans(const ParticleSet& p, double restDensity) {
@@ -75,22 +84,14 @@ DensityErrorMeans densityErrorMeans(const ParticleSet& p, double restDensity) {
 double surgeFront(const ParticleSet& p, double massBeyond) {
   if (p.size() == 0)
     return 0.0;
-  std::vector<std::pair<double, double>> reach(p.size());  // (x + r, m), farthest first
+  // the reaches negated, so that ascending is farthest first
+  std::vector<std::pair<double, double>> reach(p.size());
   double total = 0.0;
   for (std::size_t i = 0; i < p.size(); ++i) {
-    reach[i] = {double(p.x[i].x()) + 0.25 * double(p.H[i]), double(p.m[i])};
+    reach[i] = {-(double(p.x[i].x()) + 0.25 * double(p.H[i])), double(p.m[i])};
     total += double(p.m[i]);
   }
-  std::stable_sort(reach.begin(), reach.end(),
-                   [](const auto& a, const auto& b) { return a.first > b.first; });
-  const double target = massBeyond * total;
-  double beyond = 0.0;
-  for (const auto& [x, m] : reach) {
-    beyond += m;
-    if (beyond > target)
-      return x;
-  }
-  return reach.back().first;
+  return -weightedQuantile(reach, massBeyond * total, true);
 }
 
 TimeStepHeadroom timeStepHeadroom(const ParticleSet& p, double dt, double cflFactor, double dtMax) {
