@@ -507,7 +507,9 @@ double directSplitError(const AdaptContext& ctx, std::size_t o, const std::vecto
       rho += sb * double(ctx.boundary.psi[b]) *
              CubicSpline::w((xs - ctx.boundary.x[b]).norm(), pairSupport(Hs, ctx.boundary.support()));
     }
-    const double tau = keep * (rho - double(p.rho[o]) / double(rho0));
+    // (the blend lifts a child lighter than the parent only: a denser one enters whole)
+    const double target = double(p.rho[o]) / double(rho0);
+    const double tau = (rho < target ? keep : 1.0) * (rho - target);
     e += tau * tau;
   }
   return e;
@@ -516,28 +518,32 @@ double directSplitError(const AdaptContext& ctx, std::size_t o, const std::vecto
 TEST(AdaptivityTest, TheSplitErrorIsItsDirectSumBitForBitSmall) {
   // splitError gathers each parent's terms once for all its candidates, evaluates each neighbour-child kernel
   // once for both sums and each pair of children once, and skips the kernels beyond the support: the same
-  // number, bit for bit, as the sum written out, for parents with and without wall neighbours
-  Neighbourhood nb(11);
-  const AdaptContext ctx = nb.context(0.0);
-  const double r = nb.params.particleRadius;
-  std::size_t withWalls = 0, compared = 0;
-  for (std::size_t o = 0; o < nb.p.size(); o += 5) {
-    withWalls += nb.boundaryNbrs.count(o) > 0 ? 1 : 0;
-    for (int n : {2, 3, 5, 8, 27}) {
-      const double radius = r * std::cbrt(double(nb.p.m[o]) / double(nb.mFine));
-      const Quatd rot(Eigen::AngleAxisd(0.3 + 0.2 * n, Vec3d(3, -1, 2).normalized()));
-      std::vector<Vec3> children;
-      for (const Vec3d& offset : SplitTemplates::get().offsets(n))
-        children.push_back((nb.p.x[o].cast<double>() + radius * (rot * offset)).cast<Real>());
-      const double direct = directSplitError(ctx, o, children);
-      ASSERT_GT(direct, 0.0);
-      EXPECT_EQ(Adaptivity::splitError(ctx, o, children), direct)
-          << "parent " << o << ", " << n << " children";
-      ++compared;
+  // number, bit for bit, as the sum written out, for parents with and without wall neighbours; without
+  // temporal blending and with it (a lighter child's error at half weight)
+  for (int blend : {0, 10}) {
+    Neighbourhood nb(11);
+    nb.params.splitBlendSteps = blend;
+    const AdaptContext ctx = nb.context(0.0);
+    const double r = nb.params.particleRadius;
+    std::size_t withWalls = 0, compared = 0;
+    for (std::size_t o = 0; o < nb.p.size(); o += 5) {
+      withWalls += nb.boundaryNbrs.count(o) > 0 ? 1 : 0;
+      for (int n : {2, 3, 5, 8, 27}) {
+        const double radius = r * std::cbrt(double(nb.p.m[o]) / double(nb.mFine));
+        const Quatd rot(Eigen::AngleAxisd(0.3 + 0.2 * n, Vec3d(3, -1, 2).normalized()));
+        std::vector<Vec3> children;
+        for (const Vec3d& offset : SplitTemplates::get().offsets(n))
+          children.push_back((nb.p.x[o].cast<double>() + radius * (rot * offset)).cast<Real>());
+        const double direct = directSplitError(ctx, o, children);
+        ASSERT_GT(direct, 0.0);
+        EXPECT_EQ(Adaptivity::splitError(ctx, o, children), direct)
+            << "parent " << o << ", " << n << " children, split_blend_steps " << blend;
+        ++compared;
+      }
     }
+    EXPECT_GT(compared, 500u);
+    EXPECT_GT(withWalls, 20u);
   }
-  EXPECT_GT(compared, 500u);
-  EXPECT_GT(withWalls, 20u);
 }
 
 TEST(AdaptivityTest, OrientationChoiceLowersTheSplitDensityErrorSmall) {
@@ -656,46 +662,51 @@ TEST(AdaptivityTest, OrientationRefinementLowersTheChosenSplitErrorSmall) {
 
 TEST(AdaptivityTest, TheSplitErrorGradientIsItsDerivativeSmall) {
   // the gradient the position refinement descends, against central differences of its own E (double
-  // precision kernels), and that E against splitError's (single precision kernels)
-  Neighbourhood nb(11);
-  const AdaptContext ctx = nb.context(0.0);
-  const double r = nb.params.particleRadius;
-  std::size_t checked = 0;
-  for (std::size_t o = 0; o < nb.p.size(); o += 7) {
-    for (int n : {2, 3, 5, 8}) {
-      const double radius = r * std::cbrt(double(nb.p.m[o]) / double(nb.mFine));
-      const Quatd rot(Eigen::AngleAxisd(0.7 + 0.1 * n, Vec3d(1, 2, -2).normalized()));
-      std::vector<Vec3d> children;
-      std::vector<Vec3> childrenReal;
-      for (const Vec3d& offset : SplitTemplates::get().offsets(n)) {
-        childrenReal.push_back((nb.p.x[o].cast<double>() + radius * (rot * offset)).cast<Real>());
-        children.push_back(childrenReal.back().cast<double>());
-      }
-      std::vector<Vec3d> gradient;
-      const double e = Adaptivity::splitErrorGradient(ctx, o, children, gradient);
-      ASSERT_EQ(gradient.size(), children.size());
-      EXPECT_NEAR(e, Adaptivity::splitError(ctx, o, childrenReal), 1e-4 * e + 1e-12);
-      double largest = 0.0;
-      for (const Vec3d& g : gradient)
-        largest = std::max(largest, g.norm());
-      ASSERT_GT(largest, 0.0);
-      const double h = 1e-7;  // [m]: children sit 5-40 mm apart
-      std::vector<Vec3d> unused;
-      for (std::size_t s = 0; s < children.size(); ++s) {
-        for (int d = 0; d < 3; ++d) {
-          std::vector<Vec3d> plus = children, minus = children;
-          plus[s][d] += h;
-          minus[s][d] -= h;
-          const double fd = (Adaptivity::splitErrorGradient(ctx, o, plus, unused) -
-                             Adaptivity::splitErrorGradient(ctx, o, minus, unused)) /
-                            (2.0 * h);
-          EXPECT_NEAR(gradient[s][d], fd, 1e-5 * largest) << "parent " << o << ", child " << s << " of " << n;
+  // precision kernels), and that E against splitError's (single precision kernels); without temporal
+  // blending and with it (a lighter child's error at half weight)
+  for (int blend : {0, 10}) {
+    Neighbourhood nb(11);
+    nb.params.splitBlendSteps = blend;
+    const AdaptContext ctx = nb.context(0.0);
+    const double r = nb.params.particleRadius;
+    std::size_t checked = 0;
+    for (std::size_t o = 0; o < nb.p.size(); o += 7) {
+      for (int n : {2, 3, 5, 8}) {
+        const double radius = r * std::cbrt(double(nb.p.m[o]) / double(nb.mFine));
+        const Quatd rot(Eigen::AngleAxisd(0.7 + 0.1 * n, Vec3d(1, 2, -2).normalized()));
+        std::vector<Vec3d> children;
+        std::vector<Vec3> childrenReal;
+        for (const Vec3d& offset : SplitTemplates::get().offsets(n)) {
+          childrenReal.push_back((nb.p.x[o].cast<double>() + radius * (rot * offset)).cast<Real>());
+          children.push_back(childrenReal.back().cast<double>());
         }
+        std::vector<Vec3d> gradient;
+        const double e = Adaptivity::splitErrorGradient(ctx, o, children, gradient);
+        ASSERT_EQ(gradient.size(), children.size());
+        EXPECT_NEAR(e, Adaptivity::splitError(ctx, o, childrenReal), 1e-4 * e + 1e-12);
+        double largest = 0.0;
+        for (const Vec3d& g : gradient)
+          largest = std::max(largest, g.norm());
+        ASSERT_GT(largest, 0.0);
+        const double h = 1e-7;  // [m]: children sit 5-40 mm apart
+        std::vector<Vec3d> unused;
+        for (std::size_t s = 0; s < children.size(); ++s) {
+          for (int d = 0; d < 3; ++d) {
+            std::vector<Vec3d> plus = children, minus = children;
+            plus[s][d] += h;
+            minus[s][d] -= h;
+            const double fd = (Adaptivity::splitErrorGradient(ctx, o, plus, unused) -
+                               Adaptivity::splitErrorGradient(ctx, o, minus, unused)) /
+                              (2.0 * h);
+            EXPECT_NEAR(gradient[s][d], fd, 1e-5 * largest)
+                << "parent " << o << ", child " << s << " of " << n << ", split_blend_steps " << blend;
+          }
+        }
+        ++checked;
       }
-      ++checked;
     }
+    EXPECT_GT(checked, 400u);
   }
-  EXPECT_GT(checked, 400u);
 }
 
 TEST(AdaptivityTest, MovingTheChildrenLowersTheSplitErrorFromTheChosenRotationSmall) {
