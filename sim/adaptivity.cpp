@@ -205,10 +205,9 @@ class SplitErrorTerms {
         rho += double(m_fluid[k].volume) * wFluid[s * padded + k];
       for (const Wall& b : m_walls)
         rho += b.volume * CubicSpline::wScaled((xs - b.x).norm(), m_invHsb, m_kHsb);
-      // with temporal blending the solver sees a child lighter than the parent lifted (beta) towards the
-      // parent's density, which at the split is the target: its error enters at (1 - beta); a denser child
-      // keeps its own (blendSplitDensities)
-      const double tau = (rho < m_target ? m_keep : 1.0) * (rho - m_target);
+      // with temporal blending the solver sees the child's density moved (beta) towards the parent's, which
+      // at the split is the target: its error enters at (1 - beta)
+      const double tau = m_keep * (rho - m_target);
       e += tau * tau;
       if (e > bound)
         return e;
@@ -222,14 +221,13 @@ class SplitErrorTerms {
   double errorAndGradient(const std::vector<Vec3d>& children, std::vector<Vec3d>& gradient) const {
     const std::size_t n = m_children;
     const std::size_t nf = m_fluid.size();
-    thread_local std::vector<double> wf, gf, wc, gc, tauJ, tauS, keepS;
+    thread_local std::vector<double> wf, gf, wc, gc, tauJ, tauS;
     wf.resize(nf * n);
     gf.resize(nf * n);
     wc.resize(n * n);
     gc.resize(n * n);
     tauJ.resize(nf);
     tauS.resize(n);
-    keepS.resize(n);
     const double Vs = m_Vs;
     double e = 0.0;
     for (std::size_t k = 0; k < nf; ++k) {
@@ -272,11 +270,9 @@ class SplitErrorTerms {
         rho += b.volume * w;
         dRho += b.volume * g * d;
       }
-      // (as error(): the blend lifts a lighter child only)
-      keepS[s] = rho < m_target ? m_keep : 1.0;
-      tauS[s] = keepS[s] * (rho - m_target);
+      tauS[s] = m_keep * (rho - m_target);
       e += tauS[s] * tauS[s];
-      gradient[s] += 2.0 * tauS[s] * keepS[s] * dRho;
+      gradient[s] += 2.0 * tauS[s] * m_keep * dRho;
     }
     // the children's mutual terms: W(x_s - x_t) enters rho_s and rho_t
     for (std::size_t s = 0; s < n; ++s) {
@@ -284,7 +280,7 @@ class SplitErrorTerms {
         if (t == s)
           continue;
         const Vec3d d = children[s] - children[t];
-        gradient[s] += 2.0 * (keepS[s] * tauS[s] + keepS[t] * tauS[t]) * Vs * gc[s * n + t] * d;
+        gradient[s] += 2.0 * m_keep * (tauS[s] + tauS[t]) * Vs * gc[s * n + t] * d;
       }
     }
     return e;
@@ -990,9 +986,6 @@ void Adaptivity::blendSplitDensities(ParticleSet& p, const SortedParticles& sort
   const Real r = Real(params.particleRadius);
   const Real Hb = boundary.support();
   const std::size_t nStatic = boundary.staticCount();
-  Real maxH = 0;
-  for (Real h : p.H)
-    maxH = std::max(maxH, h);
   const std::size_t groups = g.start.size() - 1;
   // The parent's density sums over every particle within its pair support of the siblings' centre, found
   // through the search's grid. (The union of the siblings' own lists, used before, misses the outer shell of
@@ -1015,14 +1008,15 @@ void Adaptivity::blendSplitDensities(ParticleSet& p, const SortedParticles& sort
       const Real Ho = supportForMass(Real(mass), mFine, r);
       const Vec3 xo = centre.cast<Real>();
       double density = mass / rho0 * double(CubicSpline::w0(Ho));
-      forPointsNear(sorted.grid, sorted.fluidCells, xo, pairSupport(Ho, maxH), [&](std::uint32_t j) {
-        if (std::binary_search(members.begin(), members.end(), j))
-          return;
-        const Real h = pairSupport(Ho, p.H[j]);
-        const Real d2 = (xo - p.x[j]).squaredNorm();
-        if (d2 < h * h)
-          density += double(p.m[j]) / rho0 * double(CubicSpline::w(std::sqrt(d2), h));
-      });
+      forPointsNear(sorted.grid, sorted.fluidCells, xo, pairSupport(Ho, sorted.maxSupport),
+                    [&](std::uint32_t j) {
+                      if (std::binary_search(members.begin(), members.end(), j))
+                        return;
+                      const Real h = pairSupport(Ho, p.H[j]);
+                      const Real d2 = (xo - p.x[j]).squaredNorm();
+                      if (d2 < h * h)
+                        density += double(p.m[j]) / rho0 * double(CubicSpline::w(std::sqrt(d2), h));
+                    });
       const Real Hob = pairSupport(Ho, Hb);
       const double sb = double(boundary.volumeScale(Ho));
       auto wall = [&](std::size_t b) {
@@ -1033,14 +1027,7 @@ void Adaptivity::blendSplitDensities(ParticleSet& p, const SortedParticles& sort
       forPointsNear(sorted.grid, sorted.staticCells, xo, Hob, [&](std::uint32_t b) { wall(b); });
       forPointsNear(sorted.grid, sorted.kinematicCells, xo, Hob, [&](std::uint32_t b) { wall(nStatic + b); });
       const double rhoParent = density * rho0;
-      // Lift only: a child that reads less than its parent (the deficit of a fresh split among coarser
-      // neighbours) is lifted towards it; one that reads more keeps its own. Blending a compressed child down
-      // hides its compression from the pressure solve for the steps of the blend, and the water gives it back
-      // at once when the blend ends: with both ways, the two-hand replay threw water at 3.2 m/s where it
-      // stays at 1.8-2.7 m/s without blending (seeds 1-4), and lifting alone keeps it there.
       for (std::uint32_t s : members) {
-        if (rhoParent <= double(p.rho[s]))
-          continue;
         const double beta = double(splitBlendWeight(p.splitAge[s], params.splitBlendSteps));
         p.rho[s] = Real(double(p.rho[s]) + beta * (rhoParent - double(p.rho[s])));
       }

@@ -123,19 +123,20 @@ class Adaptivity {
   static void blendSplitVelocities(ParticleSet& p, const SimParams& params);
   /// The sorted particles of the step's neighbour search, through which blendSplitDensities() finds every
   /// particle within a parent's support: the grid, the cell ranges of the fluid (in its current order), of
-  /// the static boundary particles [0, staticCount) and of the moving ones [staticCount, size).
+  /// the static boundary particles [0, staticCount) and of the moving ones [staticCount, size), and the
+  /// largest fluid support [m].
   struct SortedParticles {
     const UniformGrid& grid;
     const std::vector<std::uint32_t>& fluidCells;
     const std::vector<std::uint32_t>& staticCells;
     const std::vector<std::uint32_t>& kinematicCells;
+    Real maxSupport;
   };
-  /// Lifts each split child's density towards its parent's, evaluated at the siblings' moving centre of
+  /// Blends each split child's density towards its parent's, evaluated at the siblings' moving centre of
   /// mass with the parent's mass and support over every fluid and boundary particle within the parent's pair
   /// support of it, the siblings left out (rest volumes, boundary terms scaled as in the solver):
-  /// rho_s <- (1 - beta) rho_s + beta rho_parent where rho_parent > rho_s; a child denser than its parent
-  /// keeps its density. Call after the densities, with the particles as the step's search sorted them
-  /// (nothing is blended when the fluid's cell ranges are not those of its particles).
+  /// rho_s <- (1 - beta) rho_s + beta rho_parent. Call after the densities, with the particles as the step's
+  /// search sorted them (nothing is blended when the fluid's cell ranges are not those of its particles).
   static void blendSplitDensities(ParticleSet& p, const SortedParticles& sorted, const BoundarySet& boundary,
                                   const SimParams& params, Real mFine);
   /// Ages every split child by one solver step; a child older than `split_blend_steps` stops blending.

@@ -884,7 +884,8 @@ void Simulation::step() {
   auto t3 = Clock::now();
   st.times.density = seconds(t2, t3);
   if (adaptive()) {
-    Adaptivity::blendSplitDensities(m_fluid, {m_grid, m_fluidCells, m_staticCells, m_kinematicCells},
+    Adaptivity::blendSplitDensities(m_fluid,
+                                    {m_grid, m_fluidCells, m_staticCells, m_kinematicCells, m_searchMaxH},
                                     m_boundary, m_params, m_latticeMass);
     const auto tb = Clock::now();
     blendTime += seconds(t3, tb);

@@ -507,9 +507,7 @@ double directSplitError(const AdaptContext& ctx, std::size_t o, const std::vecto
       rho += sb * double(ctx.boundary.psi[b]) *
              CubicSpline::w((xs - ctx.boundary.x[b]).norm(), pairSupport(Hs, ctx.boundary.support()));
     }
-    // (the blend lifts a child lighter than the parent only: a denser one enters whole)
-    const double target = double(p.rho[o]) / double(rho0);
-    const double tau = (rho < target ? keep : 1.0) * (rho - target);
+    const double tau = keep * (rho - double(p.rho[o]) / double(rho0));
     e += tau * tau;
   }
   return e;
@@ -519,7 +517,7 @@ TEST(AdaptivityTest, TheSplitErrorIsItsDirectSumBitForBitSmall) {
   // splitError gathers each parent's terms once for all its candidates, evaluates each neighbour-child kernel
   // once for both sums and each pair of children once, and skips the kernels beyond the support: the same
   // number, bit for bit, as the sum written out, for parents with and without wall neighbours; without
-  // temporal blending and with it (a lighter child's error at half weight)
+  // temporal blending and with it (the children's errors at half weight)
   for (int blend : {0, 10}) {
     Neighbourhood nb(11);
     nb.params.splitBlendSteps = blend;
@@ -663,7 +661,7 @@ TEST(AdaptivityTest, OrientationRefinementLowersTheChosenSplitErrorSmall) {
 TEST(AdaptivityTest, TheSplitErrorGradientIsItsDerivativeSmall) {
   // the gradient the position refinement descends, against central differences of its own E (double
   // precision kernels), and that E against splitError's (single precision kernels); without temporal
-  // blending and with it (a lighter child's error at half weight)
+  // blending and with it (the children's errors at half weight)
   for (int blend : {0, 10}) {
     Neighbourhood nb(11);
     nb.params.splitBlendSteps = blend;
