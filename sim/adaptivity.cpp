@@ -991,7 +991,7 @@ void Adaptivity::blendSplitDensities(ParticleSet& p, const SortedParticles& sort
   // through the search's grid. (The union of the siblings' own lists, used before, misses the outer shell of
   // the parent's support as the children's supports shrink to their own: on the two-hand replay with a lost
   // hand the parent read 10-25 % under its children, the blend let them compress, and at its end the density
-  // came back as a push that threw water at 4.9 m/s where the run without blending stays under 2 m/s.)
+  // came back as a push that threw water at 4.9 m/s where the run without blending peaked at 2.0 m/s.)
   parallelFor(tbb::blocked_range<std::size_t>(0, groups, 8), [&](const tbb::blocked_range<std::size_t>& rg) {
     std::vector<std::uint32_t> members;
     for (std::size_t k = rg.begin(); k < rg.end(); ++k) {

@@ -136,7 +136,7 @@ class Adaptivity {
   /// mass with the parent's mass and support over every fluid and boundary particle within the parent's pair
   /// support of it, the siblings left out (rest volumes, boundary terms scaled as in the solver):
   /// rho_s <- (1 - beta) rho_s + beta rho_parent. Call after the densities, with the particles as the step's
-  /// search sorted them (nothing is blended when the fluid's cell ranges are not those of its particles).
+  /// search sorted them (nothing is blended when the fluid's cell ranges hold another number of particles).
   static void blendSplitDensities(ParticleSet& p, const SortedParticles& sorted, const BoundarySet& boundary,
                                   const SimParams& params, Real mFine);
   /// Ages every split child by one solver step; a child older than `split_blend_steps` stops blending.

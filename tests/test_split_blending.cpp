@@ -57,8 +57,8 @@ TEST(SplitBlendingTest, TheParentsDensityCountsEveryParticleWithinItsSupportSmal
   // masses, support 12 r) reaches further than the siblings' own supports (4 r 9^(1/3) = 8.3 r), so a parent
   // summed over the siblings' own neighbours misses its outer shell. The blended density must be the one of
   // the whole support: every fluid particle but the siblings and every wall particle within the parent's pair
-  // support of the siblings' centre of mass. It only lifts: a sibling denser than the parent keeps its
-  // density.
+  // support of the siblings' centre of mass, the container's walls and a moving sphere's particles alike.
+  // Every sibling moves half way to it (age 0), the denser one down.
   const Real r = Real(0.01);
   SimParams params;
   params.particleRadius = r;
@@ -69,6 +69,13 @@ TEST(SplitBlendingTest, TheParentsDensityCountsEveryParticleWithinItsSupportSmal
   colliders[0].desc.shape = ShapeType::Box;
   colliders[0].desc.container = true;
   colliders[0].desc.halfExtents = Vec3d::Constant(0.1);
+  // a driven sphere in the water near the siblings: moving boundary particles, after the static ones
+  ColliderState ball;
+  ball.desc.shape = ShapeType::Sphere;
+  ball.desc.radius = 0.02;
+  ball.desc.driven = true;
+  ball.desc.position = ball.position = Vec3d(0.04, 0.045, 0.0);
+  colliders.push_back(ball);
   BoundarySet boundary;
   boundary.build(colliders, r);
   ParticleSet p;
@@ -99,10 +106,14 @@ TEST(SplitBlendingTest, TheParentsDensityCountsEveryParticleWithinItsSupportSmal
   }
   // sorted into a grid as the step's search sorts them
   UniformGrid grid;
-  grid.setup(Aabb(Vec3d::Constant(-0.15), Vec3d::Constant(0.15)), Real(6) * r);
+  grid.setup(Aabb(Vec3d::Constant(-0.15), Vec3d::Constant(0.15)), Real(4) * r);
   std::vector<std::uint32_t> order, fluidCells, staticCells, kinematicCells;
-  grid.sort(boundary.x.data(), boundary.staticCount(), order, staticCells);
+  const std::size_t nStatic = boundary.staticCount();
+  ASSERT_GT(boundary.size(), nStatic);
+  grid.sort(boundary.x.data(), nStatic, order, staticCells);
   boundary.permute(0, order);
+  grid.sort(boundary.x.data() + nStatic, boundary.size() - nStatic, order, kinematicCells);
+  boundary.permute(nStatic, order);
   grid.sort(p.x.data(), p.size(), order, fluidCells);
   p.permute(order);
   std::vector<std::size_t> members;
@@ -139,20 +150,24 @@ TEST(SplitBlendingTest, TheParentsDensityCountsEveryParticleWithinItsSupportSmal
     }
   }
   const Real Hob = pairSupport(Ho, boundary.support());
-  int walls = 0;
+  int walls = 0, moving = 0;
   for (std::size_t b = 0; b < boundary.size(); ++b) {
     const Real d = (xo - boundary.x[b]).norm();
     density += double(boundary.volumeScale(Ho)) * double(boundary.psi[b]) * double(CubicSpline::w(d, Hob));
-    walls += d < Hob ? 1 : 0;
+    walls += d < Hob && b < nStatic ? 1 : 0;
+    moving += d < Hob && b >= nStatic ? 1 : 0;
   }
   const double rhoParent = density * rho0;
   std::printf(
-      "parent density %.2f kg/m^3, %.2f of it from %d fluid particles beyond the siblings' reach; %d walls\n",
-      rhoParent, shell * rho0, outerShell, walls);
+      "parent density %.2f kg/m^3, %.2f of it from %d fluid particles beyond the siblings' reach; %d wall "
+      "and "
+      "%d moving boundary particles\n",
+      rhoParent, shell * rho0, outerShell, walls, moving);
   // the shell the siblings' own neighbours miss weighs far more than the tolerance below
   ASSERT_GT(outerShell, 0);
   ASSERT_GT(0.5 * shell * rho0, 1.0);
   ASSERT_GT(walls, 0);
+  ASSERT_GT(moving, 0);
   std::vector<Real> before(p.rho);
   const Real maxH = *std::max_element(p.H.begin(), p.H.end());
   Adaptivity::blendSplitDensities(p, {grid, fluidCells, staticCells, kinematicCells, maxH}, boundary, params,
