@@ -61,7 +61,7 @@ class UniformGrid {
   /// gives.
   void sort(const Vec3* x, std::size_t n, std::vector<std::uint32_t>& order,
             std::vector<std::uint32_t>& cells, const std::uint32_t* subset = nullptr);
-  /// the sorted points of cell (cx, cy, cz): [first, second) (tests, diagnostics)
+  /// the sorted points of cell (cx, cy, cz): [first, second) (tests; the split blend's parent density)
   std::pair<std::uint32_t, std::uint32_t> cellRange(const std::vector<std::uint32_t>& cells, int cx, int cy,
                                                     int cz) const;
   /// bytes held by scratch buffers
