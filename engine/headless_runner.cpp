@@ -23,6 +23,8 @@ void fillRunFigures(const sim::Simulation& simulation, RunSummary& s) {
   if (run.steps) {
     s.densityErrorMean = run.densityErrorSum / double(run.steps);
     s.densityErrorMax = run.densityErrorMax;
+    s.maxSpeed = run.maxSpeed;
+    s.maxSpeedTime = run.maxSpeedTime;
     s.densityIterationsMean = double(run.densityIterations) / double(run.steps);
     s.divergenceIterationsMean = double(run.divergenceIterations) / double(run.steps);
     s.neighborsMean = run.neighborsSum / double(run.steps);
@@ -104,6 +106,7 @@ void printSummary(std::ostream& out, const RunSummary& s) {
       << "us per particle-step " << s.usPerParticleStep << "\n"
       << "density error        mean " << 100.0 * s.densityErrorMean << " %, max " << 100.0 * s.densityErrorMax
       << " %\n"
+      << "fastest particle     " << s.maxSpeed << " m/s (t = " << s.maxSpeedTime << " s)\n"
       << "solver iterations    density " << s.densityIterationsMean << ", divergence "
       << s.divergenceIterationsMean << " per step\n"
       << "adaptivity           " << s.adaptivity.splits << " splits, " << s.adaptivity.merges << " merges, "

@@ -15,24 +15,26 @@ namespace fp::engine {
 
 /// What a run measured; written to the stats JSON under the names in the comments.
 struct RunSummary {
-  std::string scene;                    ///< "scene"
-  std::string mode;                     ///< "mode": uniform-low | uniform-high | surface | fluidplaying
-  std::string status = "ok";            ///< "status": ok | unstable
-  std::string message;                  ///< "message": the instability report, if any
-  int threads = 0;                      ///< "threads"
-  std::uint64_t seed = 0;               ///< "seed"
-  double particlesMean = 0;             ///< "particles_mean"
-  std::size_t particlesMax = 0;         ///< "particles_max"
-  std::size_t particlesFinal = 0;       ///< "particles_final"
-  std::size_t boundaryParticles = 0;    ///< "boundary_particles"
-  std::uint64_t steps = 0;              ///< "steps"
-  int frames = 0;                       ///< "frames"
-  double simSeconds = 0;                ///< "sim_seconds"
-  double wallSeconds = 0;               ///< "wall_seconds"
-  double usPerParticleStep = 0;         ///< "us_per_particle_step"
-  double densityErrorMean = 0;          ///< "density_error_mean": mean over steps of the mean compression [-]
-  double densityErrorMax = 0;           ///< "density_error_max": largest per-step mean compression [-]
-  double densityIterationsMean = 0;     ///< "density_iterations_mean"
+  std::string scene;                  ///< "scene"
+  std::string mode;                   ///< "mode": uniform-low | uniform-high | surface | fluidplaying
+  std::string status = "ok";          ///< "status": ok | unstable
+  std::string message;                ///< "message": the instability report, if any
+  int threads = 0;                    ///< "threads"
+  std::uint64_t seed = 0;             ///< "seed"
+  double particlesMean = 0;           ///< "particles_mean"
+  std::size_t particlesMax = 0;       ///< "particles_max"
+  std::size_t particlesFinal = 0;     ///< "particles_final"
+  std::size_t boundaryParticles = 0;  ///< "boundary_particles"
+  std::uint64_t steps = 0;            ///< "steps"
+  int frames = 0;                     ///< "frames"
+  double simSeconds = 0;              ///< "sim_seconds"
+  double wallSeconds = 0;             ///< "wall_seconds"
+  double usPerParticleStep = 0;       ///< "us_per_particle_step"
+  double densityErrorMean = 0;        ///< "density_error_mean": mean over steps of the mean compression [-]
+  double densityErrorMax = 0;         ///< "density_error_max": largest per-step mean compression [-]
+  double maxSpeed = 0;                ///< "max_speed": the fastest fluid particle's speed over the run [m/s]
+  double maxSpeedTime = 0;            ///< "max_speed_time": the simulated time at which it came [s]
+  double densityIterationsMean = 0;   ///< "density_iterations_mean"
   double divergenceIterationsMean = 0;  ///< "divergence_iterations_mean"
   double neighborsMean = 0;             ///< "neighbors_mean": fluid + boundary neighbours per particle
   double massInitial = 0;               ///< "mass_initial" [kg]

@@ -25,6 +25,8 @@ void writeStatsJson(const std::string& path, const RunSummary& s) {
   j["us_per_particle_step"] = s.usPerParticleStep;
   j["density_error_mean"] = s.densityErrorMean;
   j["density_error_max"] = s.densityErrorMax;
+  j["max_speed"] = s.maxSpeed;
+  j["max_speed_time"] = s.maxSpeedTime;
   j["density_iterations_mean"] = s.densityIterationsMean;
   j["divergence_iterations_mean"] = s.divergenceIterationsMean;
   j["neighbors_mean"] = s.neighborsMean;

@@ -25,6 +25,15 @@ constexpr Real kMinDensityRatioForDivergence = Real(0.72);
 // neighbours read rho0): the stiffness that stopped it belongs to the impact, and half of it applied again in
 // the next step threw the particle back faster than it came (mechanical energy gained in the dam break).
 constexpr Real kMinNeighborsForWarmStart = Real(20);
+// The factor's denominator |sum_j V_j grad W_ij|^2 + sum_j V_i V_j |grad W_ij|^2 counts the boundary in its
+// first term only (walls do not move). Where boundary gradients cancel around a particle with few fluid
+// neighbours (a pocket of a closing hand), it collapses to a few percent of a full neighbourhood's, and the
+// particle's stiffness grows ten to twenty times (it was thrown out at 25-35 m/s, docs/robustness.md). The
+// denominator is floored at this share of the same sum of squares with the boundary pairs counted as if
+// they moved: a local under-relaxation that leaves the solution the solve converges to unchanged. It binds
+// nowhere in the dam break and in about 1e-4 of the particle-steps at the propeller's blades and the hand
+// tank's walls (docs/method.md, Density and factor).
+constexpr Real kMinFactorDenominatorShare = Real(0.3);
 
 using Range = tbb::blocked_range<std::size_t>;
 
@@ -165,6 +174,7 @@ double DfsphSolver::densityAndFactor(SolverContext& ctx, LevelSums* levels) {
       }
       const Real hb = pairSupport(Hi, Hb);
       const Real sb = ctx.boundary.volumeScale(Hi);
+      Real sqBoundary = 0;  // the boundary pairs' V_i V_b |grad W|^2, for the floor only
       for (std::uint32_t k = bo[i]; k < bo[i + 1]; ++k) {
         const std::uint32_t b = bi[k];
         const Vec3 xib = xi - xb[b];
@@ -176,6 +186,7 @@ double DfsphSolver::densityAndFactor(SolverContext& ctx, LevelSums* levels) {
         const Vec3 gv = vg * xib;
         gradSum += gv;
         rate += gv.dot(vi - ctx.boundary.velocity(b));
+        sqBoundary += Vi * (vg * g) * xib.squaredNorm();
       }
       p.rho[i] = density * rho0;
       m_rate[i] = rate;
@@ -185,7 +196,8 @@ double DfsphSolver::densityAndFactor(SolverContext& ctx, LevelSums* levels) {
       // whatever the rounding of their sum
       const Real boundaryCount = Real(bo[i + 1] - bo[i]);
       m_full[i] = neighborMass >= (kMinNeighborsForWarmStart - Real(0.5) - boundaryCount) * m[i];
-      const Real denom = gradSum.squaredNorm() + sqSum;
+      const Real denom =
+          std::max(gradSum.squaredNorm() + sqSum, kMinFactorDenominatorShare * (sqSum + sqBoundary));
       m_factor[i] = denom > kEps ? Real(1) / denom : Real(0);
       if constexpr (kLevelSums) {
         // curl sums m_j / rho0 (v_j - v_i) x grad W_ij

@@ -149,6 +149,7 @@ void RunStats::add(const StepStats& s, std::size_t particles) {
   particleSteps += particles;
   particlesMax = std::max(particlesMax, particles);
   simTime += s.dt;
+  maxSpeed = std::max(maxSpeed, s.maxSpeed);
   densityErrorSum += s.densityError;
   densityErrorMax = std::max(densityErrorMax, s.densityError);
   densityIterations += std::uint64_t(s.densityIterations);
@@ -642,29 +643,40 @@ void Simulation::searchBoundaryNeighbors() {
   m_search.build(m_grid, m_fluid.x, m_fluid.H, walls, -1, m_searchMaxH, m_boundaryNbrs);
 }
 
-void Simulation::integrateAndCheck(Real dt) {
+Real Simulation::integrateAndCheck(Real dt) {
   const std::size_t n = m_fluid.size();
   const Real maxSpeed2 = Real(m_params.maxSpeed * m_params.maxSpeed);
   const Vec3 lo = m_scene.domain.min().cast<Real>();
   const Vec3 hi = m_scene.domain.max().cast<Real>();
-  // advance and find the first bad particle (lowest index, so the report is deterministic)
-  const std::size_t bad = parallelReduce(
-      tbb::blocked_range<std::size_t>(0, n, 1024), n,
-      [&](const tbb::blocked_range<std::size_t>& r, std::size_t first) {
+  // advance, find the first bad particle (lowest index, so the report is deterministic) and the largest
+  // squared speed (a maximum, whatever the split)
+  struct Found {
+    std::size_t first;
+    Real speed2;
+  };
+  const Found found = parallelReduce(
+      tbb::blocked_range<std::size_t>(0, n, 1024), Found{n, Real(0)},
+      [&](const tbb::blocked_range<std::size_t>& r, Found f) {
         for (std::size_t i = r.begin(); i < r.end(); ++i) {
           m_fluid.x[i] += dt * m_fluid.v[i];
           const Vec3& x = m_fluid.x[i];
           const Vec3& v = m_fluid.v[i];
-          const bool ok = x.allFinite() && v.allFinite() && v.squaredNorm() <= maxSpeed2 &&
+          const Real speed2 = v.squaredNorm();
+          const bool ok = x.allFinite() && v.allFinite() && speed2 <= maxSpeed2 &&
                           (x.array() >= lo.array()).all() && (x.array() <= hi.array()).all();
-          if (!ok && i < first)
-            first = i;
+          if (!ok && i < f.first)
+            f.first = i;
+          if (ok)
+            f.speed2 = std::max(f.speed2, speed2);
         }
-        return first;
+        return f;
       },
-      [](std::size_t a, std::size_t b) { return std::min(a, b); });
+      [](const Found& a, const Found& b) {
+        return Found{std::min(a.first, b.first), std::max(a.speed2, b.speed2)};
+      });
+  const std::size_t bad = found.first;
   if (bad == n)
-    return;
+    return std::sqrt(found.speed2);
   const Vec3& x = m_fluid.x[bad];
   const Vec3& v = m_fluid.v[bad];
   std::ostringstream s;
@@ -931,7 +943,7 @@ void Simulation::step() {
   st.times.pressure = seconds(t6, t7);
 
   m_boundaryImpulse += m_solver.boundaryImpulse() + double(dt) * m_solver.boundaryForce();
-  integrateAndCheck(dt);
+  st.maxSpeed = double(integrateAndCheck(dt));
   m_time += double(dt);
   auto t8 = Clock::now();
   st.times.integrate = seconds(t5, t6) + seconds(t7, t8);
@@ -974,6 +986,8 @@ void Simulation::step() {
   ++m_stepCount;
   st.dt = dt;
   m_last = st;
+  if (st.maxSpeed > m_run.maxSpeed)
+    m_run.maxSpeedTime = m_time;
   m_run.add(st, n);
   if (multiRate)
     m_run.level1ParticleSteps += m_level1;

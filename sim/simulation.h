@@ -48,6 +48,7 @@ struct StepStats {
   PhaseTimes times;               ///< wall time by phase
   AdaptivityStats adaptivity;     ///< splits, merges and redistributions of this step
   std::size_t heldParticles = 0;  ///< particles that held their acceleration this step (time_levels = 2)
+  double maxSpeed = 0;            ///< speed of the fastest fluid particle at the step's end [m/s]
 };
 
 /// Figures accumulated over many steps.
@@ -65,6 +66,8 @@ struct RunStats {
   AdaptivityStats adaptivity;              ///< splits, merges and redistributions
   std::uint64_t heldParticleSteps = 0;     ///< sum over steps of StepStats::heldParticles
   std::uint64_t level1ParticleSteps = 0;   ///< sum over steps of the particles on time level 1
+  double maxSpeed = 0;                     ///< largest StepStats::maxSpeed [m/s]
+  double maxSpeedTime = 0;                 ///< Simulation::time() at the end of the step that reached it [s]
   /// add one step
   void add(const StepStats& s, std::size_t particles);
 };
@@ -175,7 +178,8 @@ class Simulation {
   void searchNeighbors();
   void searchFluidNeighbors();
   void searchBoundaryNeighbors();
-  void integrateAndCheck(Real dt);
+  /// moves the fluid by dt; returns the fastest particle's speed [m/s]
+  Real integrateAndCheck(Real dt);
   std::size_t holdCoarse();
   void reactOnHeld(Real dt);
   void restoreHeld(std::vector<Real>& field, const std::vector<Real>& saved) const;

@@ -1675,3 +1675,100 @@ TEST(DivergenceSolveTest, SprayThatReachedAWallIsNotThrownBackByTheWarmStart) {
   EXPECT_GT(p.v[0].y(), Real(-0.2));
   EXPECT_LT(p.v[0].y(), Real(0.25));
 }
+
+TEST(SolverTest, TheFactorOfAParticleInAPocketIsFlooredSmall) {
+  // A particle with one fluid neighbour squeezed between two walls (a finger over a palm): the walls'
+  // gradients cancel, and the factor's denominator |sum V grad W|^2 + sum_j V_i V_j |grad W_ij|^2, whose
+  // second sum has no wall term, collapses to a small share of a full neighbourhood's. Such a particle was
+  // given ten to twenty times a normal stiffness and thrown out at 25-35 m/s. The denominator is floored at
+  // 0.3 of the same sum of squares with the wall pairs counted: checked here against that definition in
+  // double precision, along with the particles of a block next to a wall, which the floor must leave as
+  // they were.
+  const Real r = Real(0.01);
+  SimParams params;
+  params.particleRadius = r;
+  const Real m = Real(params.restDensity * 8.0 * double(r) * r * r);
+  const Real H = supportForMass(m, m, r);
+  std::vector<ColliderState> colliders(3);
+  for (int s = 0; s < 2; ++s) {  // two plates 2.2 r apart, faces at y = +-1.1 r
+    colliders[std::size_t(s)].desc.shape = ShapeType::Box;
+    colliders[std::size_t(s)].desc.halfExtents = Vec3d(0.1, 0.02, 0.1);
+    colliders[std::size_t(s)].position = Vec3d(0.0, (s == 0 ? 1.0 : -1.0) * (1.1 * r + 0.02), 0.0);
+  }
+  colliders[2].desc.shape = ShapeType::Box;  // a floor far away, under a block of fluid
+  colliders[2].desc.halfExtents = Vec3d(0.1, 0.02, 0.1);
+  colliders[2].position = Vec3d(0.5, -0.02, 0.0);
+  BoundarySet boundary;
+  boundary.build(colliders, r);
+  ParticleSet p;
+  p.add(Vec3(Real(0.003), 0, Real(-0.002)), Vec3::Zero(), m, H, Real(params.restDensity));  // the pocket
+  p.add(Vec3(2 * r, 0, 0), Vec3::Zero(), m, H, Real(params.restDensity));                   // its neighbour
+  for (int ix = 0; ix < 6; ++ix)  // a block resting on the floor
+    for (int iy = 0; iy < 4; ++iy)
+      for (int iz = 0; iz < 6; ++iz)
+        p.add(Vec3(Real(0.45) + Real(2 * ix) * r, Real(2 * iy + 1) * r, Real(-0.05) + Real(2 * iz) * r),
+              Vec3::Zero(), m, H, Real(params.restDensity));
+  NeighborList fluidNbrs, boundaryNbrs;
+  fluidNbrs.offsets.push_back(0);
+  boundaryNbrs.offsets.push_back(0);
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    for (std::size_t j = 0; j < p.size(); ++j) {
+      if (j != i && (p.x[i] - p.x[j]).norm() < pairSupport(p.H[i], p.H[j]))
+        fluidNbrs.indices.push_back(std::uint32_t(j));
+    }
+    fluidNbrs.offsets.push_back(std::uint32_t(fluidNbrs.indices.size()));
+    for (std::size_t b = 0; b < boundary.size(); ++b) {
+      if ((p.x[i] - boundary.x[b]).norm() < pairSupport(p.H[i], boundary.support()))
+        boundaryNbrs.indices.push_back(std::uint32_t(b));
+    }
+    boundaryNbrs.offsets.push_back(std::uint32_t(boundaryNbrs.indices.size()));
+  }
+  DfsphSolver solver;
+  SolverContext ctx{p, boundary, fluidNbrs, boundaryNbrs, params};
+  solver.computeDensityAndFactor(ctx);
+  const double invRho0 = 1.0 / params.restDensity;
+  const Real Hb = boundary.support();
+  // (denominator as defined, its floor)
+  auto definition = [&](std::size_t i) {
+    const double Vi = double(p.m[i]) * invRho0;
+    Vec3d gradSum = Vec3d::Zero();
+    double pairs = 0.0, wallPairs = 0.0;
+    for (std::uint32_t k = fluidNbrs.offsets[i]; k < fluidNbrs.offsets[i + 1]; ++k) {
+      const std::uint32_t j = fluidNbrs.indices[k];
+      const Vec3d grad = CubicSpline::grad(p.x[i] - p.x[j], pairSupport(p.H[i], p.H[j])).cast<double>();
+      gradSum += double(p.m[j]) * invRho0 * grad;
+      pairs += Vi * double(p.m[j]) * invRho0 * grad.squaredNorm();
+    }
+    const double sb = double(boundary.volumeScale(p.H[i]));
+    for (std::uint32_t k = boundaryNbrs.offsets[i]; k < boundaryNbrs.offsets[i + 1]; ++k) {
+      const std::uint32_t b = boundaryNbrs.indices[k];
+      const double Vb = sb * double(boundary.psi[b]);
+      const Vec3d grad = CubicSpline::grad(p.x[i] - boundary.x[b], pairSupport(p.H[i], Hb)).cast<double>();
+      gradSum += Vb * grad;
+      wallPairs += Vi * Vb * grad.squaredNorm();
+    }
+    return std::pair<double, double>(gradSum.squaredNorm() + pairs, 0.3 * (pairs + wallPairs));
+  };
+  const auto [pocketDenominator, pocketFloor] = definition(0);
+  ASSERT_EQ(fluidNbrs.count(0), 1u);
+  ASSERT_GT(boundaryNbrs.count(0), 20u);
+  // the collapse: the denominator as defined is a small share of the sum of squares with the walls (0.17,
+  // its one fluid neighbour's part; the walls' gradients cancel), and the factor is the floor's
+  EXPECT_LT(pocketDenominator, 0.25 * pocketFloor / 0.3);
+  EXPECT_NEAR(double(solver.factors()[0]) * pocketFloor, 1.0, 1e-5);
+  // the block: every particle as defined, the floor nowhere
+  double worst = 0.0;
+  std::size_t walled = 0;
+  for (std::size_t i = 2; i < p.size(); ++i) {
+    const auto [denominator, floor] = definition(i);
+    ASSERT_GT(denominator, floor) << "particle " << i;
+    walled += boundaryNbrs.count(std::uint32_t(i)) > 0;
+    worst = std::max(worst, std::abs(double(solver.factors()[i]) * denominator - 1.0));
+  }
+  std::printf(
+      "pocket: denominator %.3g as defined, floored to %.3g (x%.1f); %zu block particles (%zu at the wall) "
+      "as defined to %.2g\n",
+      pocketDenominator, pocketFloor, pocketFloor / pocketDenominator, p.size() - 2, walled, worst);
+  EXPECT_GT(walled, 30u);
+  EXPECT_LT(worst, 1e-5);
+}

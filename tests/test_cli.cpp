@@ -439,11 +439,17 @@ TEST(HeadlessRunnerTest, WritesSummaryStatsAndFramesSmall) {
   writeStatsJson(o.statsPath, s);
   std::ifstream in(o.statsPath);
   const nlohmann::json j = nlohmann::json::parse(in);
-  for (const char* key :
-       {"particles_mean", "particles_max", "steps", "sim_seconds", "wall_seconds", "us_per_particle_step",
-        "density_error_mean", "density_error_max", "mass_initial", "mass_final"}) {
+  for (const char* key : {"particles_mean", "particles_max", "steps", "sim_seconds", "wall_seconds",
+                          "us_per_particle_step", "density_error_mean", "density_error_max", "max_speed",
+                          "max_speed_time", "mass_initial", "mass_final"}) {
     EXPECT_TRUE(j.contains(key)) << key;
   }
+  // the water of the tiny dam break falls: its fastest particle over the 0.1 s, some time into it
+  EXPECT_EQ(j["max_speed"].get<double>(), s.maxSpeed);
+  EXPECT_GT(s.maxSpeed, 0.3);
+  EXPECT_LT(s.maxSpeed, 5.0);
+  EXPECT_GT(s.maxSpeedTime, 0.0);
+  EXPECT_LE(s.maxSpeedTime, s.simSeconds);
   EXPECT_EQ(j["steps"].get<std::uint64_t>(), s.steps);
   EXPECT_EQ(j["particles_max"].get<std::size_t>(), s.particlesMax);
   for (int f = 0; f <= 6; ++f) {
@@ -454,6 +460,7 @@ TEST(HeadlessRunnerTest, WritesSummaryStatsAndFramesSmall) {
   std::ostringstream summary;
   printSummary(summary, s);
   EXPECT_NE(summary.str().find("us per particle-step"), std::string::npos);
+  EXPECT_NE(summary.str().find("fastest particle"), std::string::npos);
   EXPECT_THROW(writeStatsJson("/nonexistent/dir/stats.json", s), fp::sim::InputError);
 }
 
