@@ -25,6 +25,7 @@ void fillRunFigures(const sim::Simulation& simulation, RunSummary& s) {
     s.densityErrorMax = run.densityErrorMax;
     s.maxSpeed = run.maxSpeed;
     s.maxSpeedTime = run.maxSpeedTime;
+    s.cagedParticleSteps = run.cagedParticleSteps;
     s.densityIterationsMean = double(run.densityIterations) / double(run.steps);
     s.divergenceIterationsMean = double(run.divergenceIterations) / double(run.steps);
     s.neighborsMean = run.neighborsSum / double(run.steps);
@@ -106,7 +107,8 @@ void printSummary(std::ostream& out, const RunSummary& s) {
       << "us per particle-step " << s.usPerParticleStep << "\n"
       << "density error        mean " << 100.0 * s.densityErrorMean << " %, max " << 100.0 * s.densityErrorMax
       << " %\n"
-      << "fastest particle     " << s.maxSpeed << " m/s (t = " << s.maxSpeedTime << " s)\n"
+      << "fastest particle     " << s.maxSpeed << " m/s (t = " << s.maxSpeedTime << " s); "
+      << s.cagedParticleSteps << " particle-steps caged by boundaries\n"
       << "solver iterations    density " << s.densityIterationsMean << ", divergence "
       << s.divergenceIterationsMean << " per step\n"
       << "adaptivity           " << s.adaptivity.splits << " splits, " << s.adaptivity.merges << " merges, "

@@ -34,15 +34,16 @@ struct RunSummary {
   double densityErrorMax = 0;         ///< "density_error_max": largest per-step mean compression [-]
   double maxSpeed = 0;                ///< "max_speed": the fastest fluid particle's speed over the run [m/s]
   double maxSpeedTime = 0;            ///< "max_speed_time": the simulated time at which it came [s]
-  double densityIterationsMean = 0;   ///< "density_iterations_mean"
-  double divergenceIterationsMean = 0;  ///< "divergence_iterations_mean"
-  double neighborsMean = 0;             ///< "neighbors_mean": fluid + boundary neighbours per particle
-  double massInitial = 0;               ///< "mass_initial" [kg]
-  double massFinal = 0;                 ///< "mass_final" [kg]
-  sim::Vec3d momentumFinal{0, 0, 0};    ///< "momentum_final" [kg m/s]
-  std::size_t memoryBytes = 0;          ///< "memory_bytes"
-  sim::PhaseTimes phases;               ///< "phase_seconds"
-  double splashParticles = 0;           ///< "splash_particles": splash particles per frame, mean
+  std::uint64_t cagedParticleSteps = 0;  ///< "caged_particle_steps": particle-steps moved with their cage
+  double densityIterationsMean = 0;      ///< "density_iterations_mean"
+  double divergenceIterationsMean = 0;   ///< "divergence_iterations_mean"
+  double neighborsMean = 0;              ///< "neighbors_mean": fluid + boundary neighbours per particle
+  double massInitial = 0;                ///< "mass_initial" [kg]
+  double massFinal = 0;                  ///< "mass_final" [kg]
+  sim::Vec3d momentumFinal{0, 0, 0};     ///< "momentum_final" [kg m/s]
+  std::size_t memoryBytes = 0;           ///< "memory_bytes"
+  sim::PhaseTimes phases;                ///< "phase_seconds"
+  double splashParticles = 0;            ///< "splash_particles": splash particles per frame, mean
   double splashHeight = 0;     ///< "splash_height": mean over frames of the 99.9 % mass height above rest [m]
   double splashHeightMax = 0;  ///< "splash_height_max": its largest value [m]
   double splashHeightWithSplash = 0;     ///< "splash_height_with_splash": the same with splash particles [m]

@@ -27,6 +27,7 @@ void writeStatsJson(const std::string& path, const RunSummary& s) {
   j["density_error_max"] = s.densityErrorMax;
   j["max_speed"] = s.maxSpeed;
   j["max_speed_time"] = s.maxSpeedTime;
+  j["caged_particle_steps"] = s.cagedParticleSteps;
   j["density_iterations_mean"] = s.densityIterationsMean;
   j["divergence_iterations_mean"] = s.divergenceIterationsMean;
   j["neighbors_mean"] = s.neighborsMean;

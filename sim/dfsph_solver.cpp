@@ -32,8 +32,21 @@ constexpr Real kMinNeighborsForWarmStart = Real(20);
 // denominator is floored at this share of the same sum of squares with the boundary pairs counted as if
 // they moved: a local under-relaxation that leaves the solution the solve converges to unchanged. It binds
 // nowhere in the dam break and in about 1e-4 of the particle-steps at the propeller's blades and the hand
-// tank's walls (docs/method.md, Density and factor).
+// tank's walls (docs/method.md, The factor's floor).
 constexpr Real kMinFactorDenominatorShare = Real(0.3);
+// A particle whose boundary neighbours alone fill this share of its rest density, and its fluid neighbours
+// less than kCagedFluidDensity, is caged: shut in by boundary on nearly every side, as water in a closing
+// fist is (a flat wall gives at most about 0.5, a corner of the tank 0.7). Over the first seconds of the dam
+// break, the propeller and the hand tank with the splash and aggressive hands (20 million particle-steps),
+// the boundary reached 0.8 three times, each with more than 4 fluid neighbours; in the two-hand replay whose
+// left hand closes into a fist under water, 64 particle-steps in 1.25 million did, all with 1-4 fluid
+// neighbours giving at most 0.2. Such a particle cannot lower its density by moving (the cage is smaller than
+// its spacing), and the solves made it rattle between the fist's walls ever faster as its speed shrank the
+// step: 20-55 m/s, or an instability. It exerts no stiffness (its factor is zero) and moves with the cage
+// (carryCaged). (Heavy particles jittered into the corners of a tank read 0.8-0.95 from the walls, but
+// 0.6-0.8 from their fluid neighbours: they are not caged.)
+constexpr Real kCagedBoundaryDensity = Real(0.8);
+constexpr Real kCagedFluidDensity = Real(0.5);
 
 using Range = tbb::blocked_range<std::size_t>;
 
@@ -78,6 +91,7 @@ double DfsphSolver::densityAndFactor(SolverContext& ctx, LevelSums* levels) {
   m_factor.resize(n);
   m_rate.resize(n);
   m_full.resize(n);
+  m_caged.resize(n);
   resizeCache(m_gradF, ctx.fluidNbrs.entries());
   resizeCache(m_gradB, ctx.boundaryNbrs.entries());
   const Real rho0 = Real(ctx.params.restDensity);
@@ -126,7 +140,8 @@ double DfsphSolver::densityAndFactor(SolverContext& ctx, LevelSums* levels) {
       const Vec3 vi = v[i];
       const Real Hi = H[i];
       const Real Vi = m[i] * invRho0;
-      Real density = Vi * CubicSpline::w0(Hi);
+      const Real self = Vi * CubicSpline::w0(Hi);
+      Real density = self;
       Vec3 gradSum = Vec3::Zero();
       Real sqSum = 0;
       Real rate = 0;
@@ -175,12 +190,15 @@ double DfsphSolver::densityAndFactor(SolverContext& ctx, LevelSums* levels) {
       const Real hb = pairSupport(Hi, Hb);
       const Real sb = ctx.boundary.volumeScale(Hi);
       Real sqBoundary = 0;  // the boundary pairs' V_i V_b |grad W|^2, for the floor only
+      Real boundaryDensity = 0;
       for (std::uint32_t k = bo[i]; k < bo[i + 1]; ++k) {
         const std::uint32_t b = bi[k];
         const Vec3 xib = xi - xb[b];
         Real w, g;
         CubicSpline::evaluate(xib.norm(), hb, w, g);
-        density += sb * psi[b] * w;
+        const Real wb = sb * psi[b] * w;
+        density += wb;
+        boundaryDensity += wb;
         const Real vg = sb * psi[b] * g;
         gB[k] = vg;
         const Vec3 gv = vg * xib;
@@ -198,7 +216,9 @@ double DfsphSolver::densityAndFactor(SolverContext& ctx, LevelSums* levels) {
       m_full[i] = neighborMass >= (kMinNeighborsForWarmStart - Real(0.5) - boundaryCount) * m[i];
       const Real denom =
           std::max(gradSum.squaredNorm() + sqSum, kMinFactorDenominatorShare * (sqSum + sqBoundary));
-      m_factor[i] = denom > kEps ? Real(1) / denom : Real(0);
+      m_caged[i] =
+          boundaryDensity >= kCagedBoundaryDensity && density - boundaryDensity - self < kCagedFluidDensity;
+      m_factor[i] = denom > kEps && !m_caged[i] ? Real(1) / denom : Real(0);
       if constexpr (kLevelSums) {
         // curl sums m_j / rho0 (v_j - v_i) x grad W_ij
         levels->curl[i] = rho0 * curl.norm();
@@ -593,14 +613,50 @@ void DfsphSolver::shrinkToFit() {
   for (std::vector<Real>* v : {&m_factor, &m_rate, &m_k, &m_gradF, &m_gradB, &m_viscRate})
     v->shrink_to_fit();
   m_full.shrink_to_fit();
+  m_caged.shrink_to_fit();
+  m_cagedList.shrink_to_fit();
   m_normal.shrink_to_fit();
+}
+
+std::size_t DfsphSolver::carryCaged(SolverContext& ctx) {
+  ParticleSet& p = ctx.fluid;
+  const std::size_t n = std::min(p.size(), m_caged.size());
+  parallelSelect(n, 4096, m_cagedList, [&](std::size_t i) { return m_caged[i] != 0; });
+  if (m_cagedList.empty())
+    return 0;
+  const Real Hb = ctx.boundary.support();
+  const Vec3* xb = ctx.boundary.x.data();
+  const Real* psi = ctx.boundary.psi.data();
+  const std::uint32_t* bo = ctx.boundaryNbrs.offsets.data();
+  const std::uint32_t* bi = ctx.boundaryNbrs.indices.data();
+  // the cage's velocity at the particle: its boundary neighbours' velocities weighted as in its density
+  m_boundaryImpulse += deterministicSum(m_cagedList.size(), Vec3d(Vec3d::Zero()), [&](std::size_t k) {
+    const std::uint32_t i = m_cagedList[k];
+    const Real hb = pairSupport(p.H[i], Hb);
+    Vec3 weighted = Vec3::Zero();
+    Real weight = 0;
+    for (std::uint32_t e = bo[i]; e < bo[i + 1]; ++e) {
+      const std::uint32_t b = bi[e];
+      const Real w = psi[b] * CubicSpline::w((p.x[i] - xb[b]).norm(), hb);
+      weighted += w * ctx.boundary.velocity(b);
+      weight += w;
+    }
+    if (!(weight > Real(0)))
+      return Vec3d(Vec3d::Zero());
+    const Vec3 carried = weighted / weight;
+    const Vec3d given = double(p.m[i]) * (carried - p.v[i]).cast<double>();
+    p.v[i] = carried;
+    return given;
+  });
+  return m_cagedList.size();
 }
 
 std::size_t DfsphSolver::memoryBytes() const {
   return (m_factor.capacity() + m_rate.capacity() + m_k.capacity() + m_gradF.capacity() + m_gradB.capacity() +
           m_viscRate.capacity()) *
              sizeof(Real) +
-         m_full.capacity() + m_normal.capacity() * sizeof(Vec3);
+         m_full.capacity() + m_caged.capacity() + m_cagedList.capacity() * sizeof(std::uint32_t) +
+         m_normal.capacity() * sizeof(Vec3);
 }
 
 }  // namespace fp::sim

@@ -70,6 +70,14 @@ class DfsphSolver {
   SolveResult densitySolve(SolverContext& ctx, Real dt);
   /// v_i += dt a_i (the non-pressure acceleration)
   static void integrateVelocities(SolverContext& ctx, Real dt);
+  /// Sets the velocity of every particle that the last density pass found caged (its boundary neighbours
+  /// alone fill 0.8 of its rest density, its fluid neighbours under half: water shut in a closing hand, which
+  /// cannot lower its density by moving) to its boundary neighbours' kernel-weighted velocity: it moves with
+  /// the cage, and its factor is zero, so it exerts no stiffness. The momentum this gives is counted in
+  /// boundaryImpulse(). Returns the number of caged particles.
+  std::size_t carryCaged(SolverContext& ctx);
+  /// 1 where the last density pass found the particle caged (see carryCaged)
+  const std::vector<std::uint8_t>& caged() const { return m_caged; }
 
   /// momentum given to the fluid by boundary particles since the last reset [kg m/s]
   const Vec3d& boundaryImpulse() const { return m_boundaryImpulse; }
@@ -97,15 +105,17 @@ class DfsphSolver {
   /// impulse
   Vec3d applyStiffness(SolverContext& ctx, Real dt, std::vector<Real>& accumulated);
 
-  std::vector<Real> m_factor;        // alpha_i [m^2]
-  std::vector<Real> m_rate;          // density rate or predicted density (normalised)
-  std::vector<Real> m_k;             // stiffness of the current iteration [m^2/s^2] (in the density pass:
-                                     // 1 / rho_i before it, for XSPH)
-  std::vector<std::uint8_t> m_full;  // 1 where the neighbourhood is full by count (divergence warm start)
-  std::vector<Vec3> m_normal;        // surface-tension normals [-]
-  std::vector<Real> m_gradF;         // V_j grad W_ij / (x_i - x_j) per fluid pair of this step [1/m^2]
-  std::vector<Real> m_gradB;         // the same per boundary pair, with the boundary's scaled volume [1/m^2]
-  std::vector<Real> m_viscRate;      // 1 / D_i of the laminar viscosity's damping rates [s]
+  std::vector<Real> m_factor;         // alpha_i [m^2]
+  std::vector<Real> m_rate;           // density rate or predicted density (normalised)
+  std::vector<Real> m_k;              // stiffness of the current iteration [m^2/s^2] (in the density pass:
+                                      // 1 / rho_i before it, for XSPH)
+  std::vector<std::uint8_t> m_full;   // 1 where the neighbourhood is full by count (divergence warm start)
+  std::vector<std::uint8_t> m_caged;  // 1 where the boundary alone fills kCagedBoundaryDensity
+  std::vector<std::uint32_t> m_cagedList;  // the caged particles, for carryCaged
+  std::vector<Vec3> m_normal;              // surface-tension normals [-]
+  std::vector<Real> m_gradF;               // V_j grad W_ij / (x_i - x_j) per fluid pair of this step [1/m^2]
+  std::vector<Real> m_gradB;     // the same per boundary pair, with the boundary's scaled volume [1/m^2]
+  std::vector<Real> m_viscRate;  // 1 / D_i of the laminar viscosity's damping rates [s]
   static constexpr std::size_t kNoXsph = ~std::size_t(0);
   std::size_t m_xsphSize = kNoXsph;  // particles whose XSPH sum the density pass left in fluid.a
   Vec3d m_boundaryImpulse = Vec3d::Zero();

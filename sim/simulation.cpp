@@ -150,6 +150,7 @@ void RunStats::add(const StepStats& s, std::size_t particles) {
   particlesMax = std::max(particlesMax, particles);
   simTime += s.dt;
   maxSpeed = std::max(maxSpeed, s.maxSpeed);
+  cagedParticleSteps += s.cagedParticles;
   densityErrorSum += s.densityError;
   densityErrorMax = std::max(densityErrorMax, s.densityError);
   densityIterations += std::uint64_t(s.densityIterations);
@@ -942,6 +943,7 @@ void Simulation::step() {
   auto t7 = Clock::now();
   st.times.pressure = seconds(t6, t7);
 
+  st.cagedParticles = m_solver.carryCaged(ctx);
   m_boundaryImpulse += m_solver.boundaryImpulse() + double(dt) * m_solver.boundaryForce();
   st.maxSpeed = double(integrateAndCheck(dt));
   m_time += double(dt);

@@ -49,6 +49,8 @@ struct StepStats {
   AdaptivityStats adaptivity;     ///< splits, merges and redistributions of this step
   std::size_t heldParticles = 0;  ///< particles that held their acceleration this step (time_levels = 2)
   double maxSpeed = 0;            ///< speed of the fastest fluid particle at the step's end [m/s]
+  std::size_t cagedParticles =
+      0;  ///< particles moved with the boundary that cages them (DfsphSolver::carryCaged)
 };
 
 /// Figures accumulated over many steps.
@@ -67,6 +69,7 @@ struct RunStats {
   std::uint64_t heldParticleSteps = 0;     ///< sum over steps of StepStats::heldParticles
   std::uint64_t level1ParticleSteps = 0;   ///< sum over steps of the particles on time level 1
   double maxSpeed = 0;                     ///< largest StepStats::maxSpeed [m/s]
+  std::uint64_t cagedParticleSteps = 0;    ///< sum over steps of StepStats::cagedParticles
   double maxSpeedTime = 0;                 ///< Simulation::time() at the end of the step that reached it [s]
   /// add one step
   void add(const StepStats& s, std::size_t particles);
