@@ -31,8 +31,10 @@ constexpr Real kMinNeighborsForWarmStart = Real(20);
 // particle's stiffness grows ten to twenty times (it was thrown out at 25-35 m/s, docs/robustness.md). The
 // denominator is floored at this share of the same sum of squares with the boundary pairs counted as if
 // they moved: a local under-relaxation that leaves the solution the solve converges to unchanged. It binds
-// nowhere in the dam break and in about 1e-4 of the particle-steps at the propeller's blades and the hand
-// tank's walls (docs/method.md, The factor's floor).
+// nowhere in the dam break, in 1.1e-4 of the particle-steps of the r = 5 mm hand tank with the splash hand
+// (at its walls) and in 2.1e-4 of the propeller's (at its blades), whose run it takes from 481 steps to 511
+// (0.2: 488), and 0.2 left 6 of 36 runs of the fist replay on the r = 5 mm tank above 5 m/s where 0.3 left
+// one (docs/method.md, The factor's floor).
 constexpr Real kMinFactorDenominatorShare = Real(0.3);
 // A particle whose boundary neighbours alone fill this share of its rest density, and its fluid neighbours
 // less than kCagedFluidDensity, is caged: shut in by boundary on nearly every side, as water in a closing
@@ -219,6 +221,10 @@ double DfsphSolver::densityAndFactor(SolverContext& ctx, LevelSums* levels) {
       m_caged[i] =
           boundaryDensity >= kCagedBoundaryDensity && density - boundaryDensity - self < kCagedFluidDensity;
       m_factor[i] = denom > kEps && !m_caged[i] ? Real(1) / denom : Real(0);
+      if (m_caged[i]) {  // nor a warm start: the stiffness it had when it was caged no longer pushes
+        p.kappa[i] = 0;
+        p.kappaV[i] = 0;
+      }
       if constexpr (kLevelSums) {
         // curl sums m_j / rho0 (v_j - v_i) x grad W_ij
         levels->curl[i] = rho0 * curl.norm();
@@ -325,8 +331,10 @@ SolveResult DfsphSolver::divergenceSolve(SolverContext& ctx, Real dt) {
   // neighbourhoods (by volume, see kMinDensityRatioForDivergence), as in Bender & Koschier's reference
   // implementation
   const Real minRho = kMinDensityRatioForDivergence * Real(ctx.params.restDensity);
+  // (a caged particle's rate is not this solve's to correct: it has no stiffness to correct it with)
+  const std::uint8_t* caged = m_caged.data();
   auto clampRate = [&](std::size_t i, Real rate) {
-    return rho[i] < minRho ? Real(0) : std::max(rate, Real(0));
+    return rho[i] < minRho || caged[i] ? Real(0) : std::max(rate, Real(0));
   };
   const double tolerance = ctx.params.divergenceTolerance * 0.01;
   const Real invDt = Real(1) / dt;
@@ -403,9 +411,11 @@ SolveResult DfsphSolver::densitySolve(SolverContext& ctx, Real dt) {
   SolveResult result;
   for (;;) {
     const std::uint8_t* held = ctx.held;
+    const std::uint8_t* caged = m_caged.data();
     const double sum = densityRatePass(ctx, [&](std::size_t i, Real rate) {
-      // (a held particle's density is the one it was held with: not this solve's to correct)
-      const Real error = held && held[i] ? Real(0) : predicted(i, rate) - Real(1);
+      // (a held particle's density is the one it was held with, a caged one's is beyond any stiffness of its
+      // own: neither is this solve's to correct)
+      const Real error = (held && held[i]) || caged[i] ? Real(0) : predicted(i, rate) - Real(1);
       m_k[i] = error * factor[i] * invDt2;
       return error;
     });
@@ -644,7 +654,7 @@ std::size_t DfsphSolver::carryCaged(SolverContext& ctx) {
     if (!(weight > Real(0)))
       return Vec3d(Vec3d::Zero());
     const Vec3 carried = weighted / weight;
-    const Vec3d given = double(p.m[i]) * (carried - p.v[i]).cast<double>();
+    const Vec3d given = double(p.m[i]) * (carried.cast<double>() - p.v[i].cast<double>());
     p.v[i] = carried;
     return given;
   });

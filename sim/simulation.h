@@ -48,7 +48,7 @@ struct StepStats {
   PhaseTimes times;               ///< wall time by phase
   AdaptivityStats adaptivity;     ///< splits, merges and redistributions of this step
   std::size_t heldParticles = 0;  ///< particles that held their acceleration this step (time_levels = 2)
-  double maxSpeed = 0;            ///< speed of the fastest fluid particle at the step's end [m/s]
+  double maxSpeed = 0;            ///< speed of the fastest fluid particle after the step's integration [m/s]
   std::size_t cagedParticles =
       0;  ///< particles moved with the boundary that cages them (DfsphSolver::carryCaged)
 };

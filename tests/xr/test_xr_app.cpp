@@ -500,13 +500,13 @@ TEST(XrHands, TrackingLostMidPushNeverJumpsThroughTheWater) {
 }
 
 // The same replay, in the seeds whose left fist, closing under water, trapped single particles among its
-// finger and palm particles (docs/robustness.md, Water shut in a closing fist). On the coarse tank the
-// factor's denominator collapsed there: seed 6 threw a particle at 34.8 m/s, seed 12 went unstable at 137
-// m/s. On the r = 5 mm tank (the desktop's default) such particles rattled between the fist's walls ever
-// faster as their speed shrank the step: seeds 4 and 9 went unstable at 55 and 52 m/s. With the floor on the
-// denominator and caged particles moved with their cage, the fastest particle of every step stays under 5
-// m/s (2.5, 2.4, 2.3 and 3.0 m/s measured; the hands move at under 1 m/s; seeds 1-80 of the coarse replay and
-// 1-36 of the fine one all stayed under 4.3 m/s).
+// finger and palm particles (docs/robustness.md, Water shut in a closing fist). Before session 32, on the
+// coarse tank the factor's denominator collapsed there: seed 6 threw a particle at 34.8 m/s, seed 12 went
+// unstable at 137 m/s. On the r = 5 mm tank (the desktop's default) such particles rattled between the fist's
+// walls ever faster as their speed shrank the step: seeds 4 and 9 went unstable (above 50 m/s). With the
+// floor on the denominator and caged particles moved with their cage, the fastest particle of every step
+// stays under 5 m/s (the hands move at under 1 m/s; of seeds 1-80 of the coarse replay and 1-36 of the fine
+// one, two runs went above 5 m/s, at 5.6 and 8.2).
 TEST(XrHands, AFistClosingUnderWaterDoesNotThrowTheWater) {
   struct Case {
     const char* scene;
