@@ -90,6 +90,36 @@ namespace {
 
 /// A jittered cloud of particles of mixed masses inside a container, with neighbour lists, ready for one
 /// adaptation step.
+/// Every fluid pair within its pair support, both ways, and every boundary particle within the particle's
+/// pair support with the boundary: the lists by brute force, for small hand-built scenes.
+void bruteForceLists(const ParticleSet& p, const BoundarySet& boundary, NeighborList& fluidNbrs,
+                     NeighborList& boundaryNbrs) {
+  fluidNbrs.offsets.assign(1, 0);
+  boundaryNbrs.offsets.assign(1, 0);
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    for (std::size_t j = 0; j < p.size(); ++j) {
+      if (j != i && (p.x[i] - p.x[j]).norm() < pairSupport(p.H[i], p.H[j]))
+        fluidNbrs.indices.push_back(std::uint32_t(j));
+    }
+    fluidNbrs.offsets.push_back(std::uint32_t(fluidNbrs.indices.size()));
+    for (std::size_t b = 0; b < boundary.size(); ++b) {
+      if ((p.x[i] - boundary.x[b]).norm() < pairSupport(p.H[i], boundary.support()))
+        boundaryNbrs.indices.push_back(std::uint32_t(b));
+    }
+    boundaryNbrs.offsets.push_back(std::uint32_t(boundaryNbrs.indices.size()));
+  }
+}
+
+/// A 6 x 4 x 6 lattice block of spacing 2r at rest on a floor whose top is y = 0, x from 0.45 m, z from -0.05
+/// m.
+void addRestingBlock(ParticleSet& p, Real m, Real H, Real r, Real rho) {
+  for (int ix = 0; ix < 6; ++ix)
+    for (int iy = 0; iy < 4; ++iy)
+      for (int iz = 0; iz < 6; ++iz)
+        p.add(Vec3(Real(0.45) + Real(2 * ix) * r, Real(2 * iy + 1) * r, Real(-0.05) + Real(2 * iz) * r),
+              Vec3::Zero(), m, H, rho);
+}
+
 struct Neighbourhood {
   SimParams params;
   ParticleSet p;
@@ -1636,20 +1666,7 @@ TEST(DivergenceSolveTest, SprayThatReachedAWallIsNotThrownBackByTheWarmStart) {
   for (const Vec3& x : {Vec3(0, y, 0), Vec3(2 * r, y, 0), Vec3(0, y, 2 * r), Vec3(2 * r, y, 2 * r)})
     p.add(x, Vec3(0, 4, 0), m, supportForMass(m, m, r), Real(params.restDensity));
   NeighborList fluidNbrs, boundaryNbrs;
-  fluidNbrs.offsets.push_back(0);
-  boundaryNbrs.offsets.push_back(0);
-  for (std::size_t i = 0; i < p.size(); ++i) {
-    for (std::size_t j = 0; j < p.size(); ++j) {
-      if (j != i && (p.x[i] - p.x[j]).norm() < pairSupport(p.H[i], p.H[j]))
-        fluidNbrs.indices.push_back(std::uint32_t(j));
-    }
-    fluidNbrs.offsets.push_back(std::uint32_t(fluidNbrs.indices.size()));
-    for (std::size_t b = 0; b < boundary.size(); ++b) {
-      if ((p.x[i] - boundary.x[b]).norm() < pairSupport(p.H[i], boundary.support()))
-        boundaryNbrs.indices.push_back(std::uint32_t(b));
-    }
-    boundaryNbrs.offsets.push_back(std::uint32_t(boundaryNbrs.indices.size()));
-  }
+  bruteForceLists(p, boundary, fluidNbrs, boundaryNbrs);
   ASSERT_LT(fluidNbrs.count(0) + boundaryNbrs.count(0), 20u);
   DfsphSolver solver;
   SolverContext ctx{p, boundary, fluidNbrs, boundaryNbrs, params};
@@ -1699,26 +1716,9 @@ TEST(SolverTest, TheFactorOfAParticleInAPocketIsFlooredSmall) {
   boundary.build(colliders, r);
   ParticleSet p;
   p.add(Vec3(Real(0.002), Real(0.001), 0), Vec3::Zero(), m, H, Real(params.restDensity));  // the pocket
-  for (int ix = 0; ix < 6; ++ix)  // a block resting on the floor
-    for (int iy = 0; iy < 4; ++iy)
-      for (int iz = 0; iz < 6; ++iz)
-        p.add(Vec3(Real(0.45) + Real(2 * ix) * r, Real(2 * iy + 1) * r, Real(-0.05) + Real(2 * iz) * r),
-              Vec3::Zero(), m, H, Real(params.restDensity));
+  addRestingBlock(p, m, H, r, Real(params.restDensity));
   NeighborList fluidNbrs, boundaryNbrs;
-  fluidNbrs.offsets.push_back(0);
-  boundaryNbrs.offsets.push_back(0);
-  for (std::size_t i = 0; i < p.size(); ++i) {
-    for (std::size_t j = 0; j < p.size(); ++j) {
-      if (j != i && (p.x[i] - p.x[j]).norm() < pairSupport(p.H[i], p.H[j]))
-        fluidNbrs.indices.push_back(std::uint32_t(j));
-    }
-    fluidNbrs.offsets.push_back(std::uint32_t(fluidNbrs.indices.size()));
-    for (std::size_t b = 0; b < boundary.size(); ++b) {
-      if ((p.x[i] - boundary.x[b]).norm() < pairSupport(p.H[i], boundary.support()))
-        boundaryNbrs.indices.push_back(std::uint32_t(b));
-    }
-    boundaryNbrs.offsets.push_back(std::uint32_t(boundaryNbrs.indices.size()));
-  }
+  bruteForceLists(p, boundary, fluidNbrs, boundaryNbrs);
   DfsphSolver solver;
   SolverContext ctx{p, boundary, fluidNbrs, boundaryNbrs, params};
   solver.computeDensityAndFactor(ctx);
@@ -1800,26 +1800,9 @@ TEST(SolverTest, AParticleCagedByAMovingBoundaryMovesWithItSmall) {
   ParticleSet p;
   p.add(Vec3(Real(0.003), 0, Real(-0.002)), Vec3(0, 3, 0), m, H, Real(params.restDensity));  // caged
   p.add(Vec3(2 * r, 0, 0), Vec3(0, -1, 0), m, H, Real(params.restDensity));  // its one neighbour, caged too
-  for (int ix = 0; ix < 6; ++ix)
-    for (int iy = 0; iy < 4; ++iy)
-      for (int iz = 0; iz < 6; ++iz)
-        p.add(Vec3(Real(0.45) + Real(2 * ix) * r, Real(2 * iy + 1) * r, Real(-0.05) + Real(2 * iz) * r),
-              Vec3::Zero(), m, H, Real(params.restDensity));
+  addRestingBlock(p, m, H, r, Real(params.restDensity));
   NeighborList fluidNbrs, boundaryNbrs;
-  fluidNbrs.offsets.push_back(0);
-  boundaryNbrs.offsets.push_back(0);
-  for (std::size_t i = 0; i < p.size(); ++i) {
-    for (std::size_t j = 0; j < p.size(); ++j) {
-      if (j != i && (p.x[i] - p.x[j]).norm() < pairSupport(p.H[i], p.H[j]))
-        fluidNbrs.indices.push_back(std::uint32_t(j));
-    }
-    fluidNbrs.offsets.push_back(std::uint32_t(fluidNbrs.indices.size()));
-    for (std::size_t b = 0; b < boundary.size(); ++b) {
-      if ((p.x[i] - boundary.x[b]).norm() < pairSupport(p.H[i], boundary.support()))
-        boundaryNbrs.indices.push_back(std::uint32_t(b));
-    }
-    boundaryNbrs.offsets.push_back(std::uint32_t(boundaryNbrs.indices.size()));
-  }
+  bruteForceLists(p, boundary, fluidNbrs, boundaryNbrs);
   DfsphSolver solver;
   SolverContext ctx{p, boundary, fluidNbrs, boundaryNbrs, params};
   solver.computeDensityAndFactor(ctx);
