@@ -230,6 +230,11 @@ void runFields(Io& io, R& run) {
   io.field(run.divergenceIterations, what);
   io.field(run.neighborsSum, what);
   adaptivityFields(io, run.adaptivity);
+  io.field(run.heldParticleSteps, what);
+  io.field(run.level1ParticleSteps, what);
+  io.field(run.maxSpeed, what);
+  io.field(run.maxSpeedTime, what);
+  io.field(run.cagedParticleSteps, what);
 }
 
 template <class Io, class R>
@@ -243,6 +248,9 @@ void lastStepFields(Io& io, R& last) {
   io.field(last.fluidNeighbors, what);
   io.field(last.boundaryNeighbors, what);
   adaptivityFields(io, last.adaptivity);
+  io.field(last.heldParticles, what);
+  io.field(last.maxSpeed, what);
+  io.field(last.cagedParticles, what);
 }
 
 }  // namespace

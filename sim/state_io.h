@@ -31,8 +31,10 @@ class StateError : public InputError {
 };
 
 /// version of the format written by this build (3: the uniform modes store no adaptivity fields, and static
-/// boundary particles no velocity nor local position; files of version 2 are refused with the version)
-constexpr std::uint32_t kStateVersion = 3;
+/// boundary particles no velocity nor local position; 4: the run's fastest particle, its time, the caged,
+/// held and time-level-1 particle-steps, so that a resumed run reports the whole run's; files of other
+/// versions are refused with the version)
+constexpr std::uint32_t kStateVersion = 4;
 
 /// FNV-1a hash of what a simulation is built from: domain, fluid blocks, colliders (meshes included),
 /// parameters as loaded, mode and frame rate (not the name nor the default run length)

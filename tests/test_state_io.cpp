@@ -57,6 +57,15 @@ void expectIdentical(const sim::Simulation& a, const sim::Simulation& b) {
   EXPECT_TRUE(sameBits(a.boundary().x, b.boundary().x));
   EXPECT_EQ(a.runStats().adaptivity.splits, b.runStats().adaptivity.splits);
   EXPECT_EQ(a.runStats().adaptivity.merges, b.runStats().adaptivity.merges);
+  // the run's figures cover the whole run, the part before the save included
+  EXPECT_EQ(a.runStats().steps, b.runStats().steps);
+  EXPECT_EQ(a.runStats().particleSteps, b.runStats().particleSteps);
+  EXPECT_EQ(a.runStats().maxSpeed, b.runStats().maxSpeed);
+  EXPECT_EQ(a.runStats().maxSpeedTime, b.runStats().maxSpeedTime);
+  EXPECT_EQ(a.runStats().cagedParticleSteps, b.runStats().cagedParticleSteps);
+  EXPECT_EQ(a.runStats().heldParticleSteps, b.runStats().heldParticleSteps);
+  EXPECT_EQ(a.runStats().level1ParticleSteps, b.runStats().level1ParticleSteps);
+  EXPECT_EQ(a.lastStep().maxSpeed, b.lastStep().maxSpeed);
   EXPECT_EQ(a.boundaryImpulse(), b.boundaryImpulse());
 }
 
@@ -71,6 +80,8 @@ TEST_P(StateIo, ResumedRunIsBitIdenticalOnOneThread) {
   uninterrupted.params().viscosity = 0.05;  // a live edit before the save is part of the state
   const std::string path = fp::test::tempPath("state.bin");
   sim::saveState(path, uninterrupted, {1.5, -2.0});
+  const sim::RunStats atSave = uninterrupted.runStats();
+  const sim::StepStats lastAtSave = uninterrupted.lastStep();
   for (int k = 0; k < 40; ++k)
     uninterrupted.step();
 
@@ -78,6 +89,12 @@ TEST_P(StateIo, ResumedRunIsBitIdenticalOnOneThread) {
   EXPECT_EQ(sim::loadState(path, resumed), (std::vector<double>{1.5, -2.0}));
   EXPECT_EQ(resumed.stepCount(), 30u);
   EXPECT_EQ(resumed.params().viscosity, 0.05);
+  // the run's fastest particle so far comes with the state (a resumed run reports the whole run's)
+  EXPECT_GT(atSave.maxSpeed, 0.0);
+  EXPECT_EQ(resumed.runStats().maxSpeed, atSave.maxSpeed);
+  EXPECT_EQ(resumed.runStats().maxSpeedTime, atSave.maxSpeedTime);
+  EXPECT_EQ(resumed.runStats().cagedParticleSteps, atSave.cagedParticleSteps);
+  EXPECT_EQ(resumed.lastStep().maxSpeed, lastAtSave.maxSpeed);
   for (int k = 0; k < 40; ++k)
     resumed.step();
   expectIdentical(uninterrupted, resumed);
@@ -208,9 +225,12 @@ TEST(StateIoErrors, CorruptMagicVersionHashAndBytes) {
   bad = s.bytes;
   bad[8] = char(sim::kStateVersion + 1);
   expectRefused(bad, target, "version");
-  // version 2 (before issue #12's memory work) stored every adaptivity field and the walls' velocities
+  // version 2 (before issue #12's memory work) stored every adaptivity field and the walls' velocities;
+  // version 3 (before session 33) not the run's fastest particle nor its caged, held and level-1 counts
   bad[8] = 2;
-  expectRefused(bad, target, "state file version 2, this build reads version 3");
+  expectRefused(bad, target, "state file version 2, this build reads version 4");
+  bad[8] = 3;
+  expectRefused(bad, target, "state file version 3, this build reads version 4");
   bad = s.bytes;
   bad[12] ^= 1;  // the scene hash
   expectRefused(bad, target);
