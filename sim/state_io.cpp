@@ -275,6 +275,7 @@ class StateAccess {
     BoundarySet boundary;  // the per-particle arrays only
     RunStats run;
     StepStats last;
+    std::uint64_t level1 = 0;  // particles on time level 1 at the last synchronised step (time_levels = 2)
     std::vector<double> extra;
   };
 
@@ -346,6 +347,7 @@ class StateAccess {
     boundaryArrays([&](auto member, const char* what, bool) { w.array(sim.m_boundary.*member, what); });
     runFields(w, sim.m_run);
     lastStepFields(w, sim.m_last);
+    w.put(std::uint64_t(sim.m_level1));
     w.putArray(extra);
     const std::uint64_t sum = fnv1a(w.bytes().data(), w.bytes().size());
     w.put(sum);
@@ -494,6 +496,23 @@ class StateAccess {
 
     runFields(r, s.run);
     lastStepFields(r, s.last);
+    // the figures the reports print (a NaN would stay the run's largest speed for good), and the last step's
+    // size, by which the app paces its steps
+    auto figure = [](double x) { return std::isfinite(x) && x >= 0.0; };
+    const RunStats& run = s.run;
+    if (!figure(run.simTime) || !figure(run.densityErrorSum) || !figure(run.densityErrorMax) ||
+        !figure(run.neighborsSum) || !figure(run.maxSpeed) || !figure(run.maxSpeedTime) ||
+        run.maxSpeedTime > s.time) {
+      throw StateError("corrupt: bad run statistics");
+    }
+    constexpr double kLongestStep = 1.0;  // [s] (dt_max is at most 0.05 s)
+    const StepStats& last = s.last;
+    if (!figure(last.dt) || last.dt > kLongestStep || !figure(last.densityError) ||
+        !std::isfinite(last.solverDensityError) || !figure(last.fluidNeighbors) ||
+        !figure(last.boundaryNeighbors) || !figure(last.maxSpeed) || last.maxSpeed > run.maxSpeed) {
+      throw StateError("corrupt: bad figures of the last step");
+    }
+    s.level1 = r.get<std::uint64_t>("the time levels");  // (a counter, like the run's)
     s.extra = r.getArray<double>("the app state");
     r.get<std::uint64_t>("the checksum");
     if (r.pos() != r.size())
@@ -524,6 +543,10 @@ class StateAccess {
         [&](auto member, const char*, bool) { sim.m_boundary.*member = std::move(s.boundary.*member); });
     sim.m_run = s.run;
     sim.m_last = s.last;
+    // time levels (time_levels = 2): the next synchronised step gives the particles held in the last step
+    // their gravity, and a step between two synchronised ones counts the last one's level-1 particles
+    sim.m_heldLastStep = s.last.heldParticles > 0;
+    sim.m_level1 = std::size_t(s.level1);
     // Neighbour lists valid for the restored particles, as after a step (readers such as the splash use
     // them). The sort is stable and the positions are those of the last sort, so the order does not change.
     sim.m_fluidPresorted = false;  // (the grid's cells are those of the particles replaced)

@@ -6,10 +6,12 @@
 #include <tbb/global_control.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <string>
 
 #include "sim/kernels.h"
@@ -103,6 +105,41 @@ TEST_P(StateIo, ResumedRunIsBitIdenticalOnOneThread) {
         << "the comparison should cover steps that change the resolution";
   }
   std::filesystem::remove(path);
+}
+
+TEST(StateIoTimeLevels, AResumedRunCountsTheHeldParticleStepsOfTheWholeRun) {
+  // With time levels (time_levels = 2) coarse particles are held in every other step: the run's held and
+  // level-1 particle-steps come with the state, so a resumed run reports the whole run's.
+  // (the scene of TimeLevelsTest.TankAtRestSmallStaysStillWithHeldParticles, coarser: a sphere spinning in
+  // the air sets a step that the water at rest may take twice)
+  tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+  sim::SceneDesc scene = fp::test::tankScene(sim::Vec3d(0.2, 0.2, 0.2), sim::Vec3d(-0.2, 0.0, -0.2),
+                                             sim::Vec3d(0.2, 0.3, 0.2), 0.2 / 20.4);
+  scene.mode = sim::AdaptivityMode::FluidPlaying;
+  scene.params.timeLevels = 2;
+  sim::ColliderDesc spinner;
+  spinner.name = "spinner";
+  spinner.shape = sim::ShapeType::Sphere;
+  spinner.radius = 0.02;
+  spinner.position = sim::Vec3d(0.0, 0.37, 0.0);
+  spinner.angularVelocity = sim::Vec3d(0.0, 0.0, 187.0);
+  scene.colliders.push_back(spinner);
+  sim::Simulation uninterrupted(scene);
+  for (int k = 0; k < 30; ++k)
+    uninterrupted.step();
+  const sim::RunStats atSave = uninterrupted.runStats();
+  ASSERT_GT(atSave.heldParticleSteps, 0u) << "the scene should hold particles on time level 1";
+  ASSERT_GT(atSave.level1ParticleSteps, 0u);
+  const std::string bytes = sim::encodeState(uninterrupted);
+  for (int k = 0; k < 20; ++k)
+    uninterrupted.step();
+  sim::Simulation resumed(scene);
+  sim::decodeState(bytes, resumed);
+  EXPECT_EQ(resumed.runStats().heldParticleSteps, atSave.heldParticleSteps);
+  EXPECT_EQ(resumed.runStats().level1ParticleSteps, atSave.level1ParticleSteps);
+  for (int k = 0; k < 20; ++k)
+    resumed.step();
+  expectIdentical(uninterrupted, resumed);
 }
 
 TEST_P(StateIo, PreparedNeighborsAreCurrentAndLeaveEveryStepBitIdentical) {
@@ -290,6 +327,44 @@ TEST(StateIoErrors, AnAbsurdButFiniteSupportOrMassIsRefused) {
   // the unmodified bytes still load
   sim::Simulation target(s.scene);
   EXPECT_NO_THROW(sim::decodeState(s.bytes, target, false));
+}
+
+TEST(StateIoErrors, BadRunFiguresAreRefused) {
+  // The run's figures are printed by every report, and the last step's size paces the app's steps: a NaN
+  // largest speed would stay the run's for good (a maximum with NaN is NaN), and a last step of 1e300 s would
+  // stop the window's simulation. Found by review (session 33); the reader bounds them.
+  Saved& s = saved();
+  const sim::RunStats& run = s.source.runStats();
+  const sim::StepStats& last = s.source.lastStep();
+  ASSERT_GT(run.maxSpeed, 0.0);
+  auto refuse = [&](const std::string& pattern, double value, const char* expected) {
+    const std::size_t at = s.bytes.find(pattern);
+    ASSERT_NE(at, std::string::npos) << "the figures are not stored as raw values";
+    std::string bad = s.bytes;
+    std::memcpy(bad.data() + at, &value, sizeof(value));
+    sim::Simulation target(s.scene);
+    try {
+      sim::decodeState(bad, target, false);
+      ADD_FAILURE() << value << " accepted";
+    } catch (const sim::StateError& e) {
+      EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
+    }
+  };
+  // the run's largest speed and its time, stored side by side
+  std::string speed(reinterpret_cast<const char*>(&run.maxSpeed), sizeof(double));
+  speed.append(reinterpret_cast<const char*>(&run.maxSpeedTime), sizeof(double));
+  for (const double value : {std::nan(""), -1.0, std::numeric_limits<double>::infinity()})
+    refuse(speed, value, "bad run statistics");
+  // the last step's size, followed by its density iterations
+  std::string dt(reinterpret_cast<const char*>(&last.dt), sizeof(double));
+  dt.append(reinterpret_cast<const char*>(&last.densityIterations), sizeof(int));
+  for (const double value : {std::nan(""), -1e-3, 1e300})
+    refuse(dt, value, "bad figures of the last step");
+  // the unmodified bytes still load, with the figures
+  sim::Simulation target(s.scene);
+  EXPECT_NO_THROW(sim::decodeState(s.bytes, target, false));
+  EXPECT_EQ(target.runStats().maxSpeed, run.maxSpeed);
+  EXPECT_EQ(target.lastStep().dt, last.dt);
 }
 
 TEST(StateIoErrors, AnotherSceneIsRefused) {
