@@ -497,7 +497,8 @@ class StateAccess {
     runFields(r, s.run);
     lastStepFields(r, s.last);
     // the figures the reports print (a NaN would stay the run's largest speed for good), and the last step's
-    // size, by which the app paces its steps
+    // size, by which the app paces its steps (resetRunStats() keeps the last step: with no step in the run
+    // since, its speed may exceed the run's)
     auto figure = [](double x) { return std::isfinite(x) && x >= 0.0; };
     const RunStats& run = s.run;
     if (!figure(run.simTime) || !figure(run.densityErrorSum) || !figure(run.densityErrorMax) ||
@@ -509,7 +510,8 @@ class StateAccess {
     const StepStats& last = s.last;
     if (!figure(last.dt) || last.dt > kLongestStep || !figure(last.densityError) ||
         !std::isfinite(last.solverDensityError) || !figure(last.fluidNeighbors) ||
-        !figure(last.boundaryNeighbors) || !figure(last.maxSpeed) || last.maxSpeed > run.maxSpeed) {
+        !figure(last.boundaryNeighbors) || !figure(last.maxSpeed) ||
+        (run.steps > 0 && last.maxSpeed > run.maxSpeed)) {
       throw StateError("corrupt: bad figures of the last step");
     }
     s.level1 = r.get<std::uint64_t>("the time levels");  // (a counter, like the run's)

@@ -124,22 +124,33 @@ TEST(StateIoTimeLevels, AResumedRunCountsTheHeldParticleStepsOfTheWholeRun) {
   spinner.position = sim::Vec3d(0.0, 0.37, 0.0);
   spinner.angularVelocity = sim::Vec3d(0.0, 0.0, 187.0);
   scene.colliders.push_back(spinner);
-  sim::Simulation uninterrupted(scene);
-  for (int k = 0; k < 30; ++k)
-    uninterrupted.step();
-  const sim::RunStats atSave = uninterrupted.runStats();
-  ASSERT_GT(atSave.heldParticleSteps, 0u) << "the scene should hold particles on time level 1";
-  ASSERT_GT(atSave.level1ParticleSteps, 0u);
-  const std::string bytes = sim::encodeState(uninterrupted);
-  for (int k = 0; k < 20; ++k)
-    uninterrupted.step();
-  sim::Simulation resumed(scene);
-  sim::decodeState(bytes, resumed);
-  EXPECT_EQ(resumed.runStats().heldParticleSteps, atSave.heldParticleSteps);
-  EXPECT_EQ(resumed.runStats().level1ParticleSteps, atSave.level1ParticleSteps);
-  for (int k = 0; k < 20; ++k)
-    resumed.step();
-  expectIdentical(uninterrupted, resumed);
+  // Saved after a step that held particles (30 steps: the next one is synchronised and must give them the
+  // gravity of the step they drifted through) and after a synchronised one (31: the next one holds and counts
+  // the last synchronised step's level-1 particles).
+  for (const int saveAt : {30, 31}) {
+    sim::Simulation uninterrupted(scene);
+    for (int k = 0; k < saveAt; ++k)
+      uninterrupted.step();
+    const sim::RunStats atSave = uninterrupted.runStats();
+    ASSERT_GT(atSave.heldParticleSteps, 0u) << "the scene should hold particles on time level 1";
+    ASSERT_GT(atSave.level1ParticleSteps, 0u);
+    if (saveAt % 2 == 0)
+      ASSERT_GT(uninterrupted.lastStep().heldParticles, 0u) << "the step before the save should hold";
+    else
+      ASSERT_EQ(uninterrupted.lastStep().heldParticles, 0u)
+          << "the step before the save should be synchronised";
+    const std::string bytes = sim::encodeState(uninterrupted);
+    for (int k = 0; k < 20; ++k)
+      uninterrupted.step();
+    sim::Simulation resumed(scene);
+    sim::decodeState(bytes, resumed);
+    EXPECT_EQ(resumed.runStats().heldParticleSteps, atSave.heldParticleSteps);
+    EXPECT_EQ(resumed.runStats().level1ParticleSteps, atSave.level1ParticleSteps);
+    for (int k = 0; k < 20; ++k)
+      resumed.step();
+    SCOPED_TRACE("saved after step " + std::to_string(saveAt));
+    expectIdentical(uninterrupted, resumed);
+  }
 }
 
 TEST_P(StateIo, PreparedNeighborsAreCurrentAndLeaveEveryStepBitIdentical) {
@@ -337,11 +348,13 @@ TEST(StateIoErrors, BadRunFiguresAreRefused) {
   const sim::RunStats& run = s.source.runStats();
   const sim::StepStats& last = s.source.lastStep();
   ASSERT_GT(run.maxSpeed, 0.0);
-  auto refuse = [&](const std::string& pattern, double value, const char* expected) {
+  // (the value is written at `offset` bytes into the pattern)
+  auto refuse = [&](const std::string& pattern, std::size_t offset, double value, const char* expected) {
     const std::size_t at = s.bytes.find(pattern);
     ASSERT_NE(at, std::string::npos) << "the figures are not stored as raw values";
+    ASSERT_EQ(s.bytes.find(pattern, at + 1), std::string::npos) << "the pattern is not unique";
     std::string bad = s.bytes;
-    std::memcpy(bad.data() + at, &value, sizeof(value));
+    std::memcpy(bad.data() + at + offset, &value, sizeof(value));
     sim::Simulation target(s.scene);
     try {
       sim::decodeState(bad, target, false);
@@ -350,16 +363,22 @@ TEST(StateIoErrors, BadRunFiguresAreRefused) {
       EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
     }
   };
-  // the run's largest speed and its time, stored side by side
+  // the run's largest speed, its time and the caged particle-steps, stored side by side
   std::string speed(reinterpret_cast<const char*>(&run.maxSpeed), sizeof(double));
   speed.append(reinterpret_cast<const char*>(&run.maxSpeedTime), sizeof(double));
+  speed.append(reinterpret_cast<const char*>(&run.cagedParticleSteps), sizeof(std::uint64_t));
   for (const double value : {std::nan(""), -1.0, std::numeric_limits<double>::infinity()})
-    refuse(speed, value, "bad run statistics");
+    refuse(speed, 0, value, "bad run statistics");
+  // a largest speed later than the state's time
+  refuse(speed, sizeof(double), s.source.time() + 1.0, "bad run statistics");
+  // the last step faster than the run's fastest (the run's largest speed set below the last step's)
+  ASSERT_GT(last.maxSpeed, 0.0);
+  refuse(speed, 0, 0.5 * last.maxSpeed, "bad figures of the last step");
   // the last step's size, followed by its density iterations
   std::string dt(reinterpret_cast<const char*>(&last.dt), sizeof(double));
   dt.append(reinterpret_cast<const char*>(&last.densityIterations), sizeof(int));
   for (const double value : {std::nan(""), -1e-3, 1e300})
-    refuse(dt, value, "bad figures of the last step");
+    refuse(dt, 0, value, "bad figures of the last step");
   // the unmodified bytes still load, with the figures
   sim::Simulation target(s.scene);
   EXPECT_NO_THROW(sim::decodeState(s.bytes, target, false));
