@@ -362,9 +362,8 @@ TEST(AdaptivePhysicsTest, DamBreakSurgeFrontFollowsUniformHigh) {
     farthestLate.push_back(lead(adaptive.farthest, high.farthest, 7));
     std::printf(
         "start %d: surge front, fluidplaying against uniform-high over 0.3 s: the water's (%.1f %% of the "
-        "mass "
-        "beyond) %.1f %% at most, %.1f %% from 0.2 s on; the farthest particle's %.1f %%, %.1f %% from 0.2 s "
-        "on\n",
+        "mass beyond) %.1f %% at most, %.1f %% from 0.2 s on; the farthest particle's %.1f %%, %.1f %% from "
+        "0.2 s on\n",
         start, 100.0 * kWaterBeyond, 100.0 * water.back(), 100.0 * waterLate.back(), 100.0 * farthest.back(),
         100.0 * farthestLate.back());
     // the front has moved: the column collapsed

@@ -88,8 +88,6 @@ TEST(SplitTemplatesTest, PatternsAreCentredAndShapedSmall) {
 
 namespace {
 
-/// A jittered cloud of particles of mixed masses inside a container, with neighbour lists, ready for one
-/// adaptation step.
 /// Every fluid pair within its pair support, both ways, and every boundary particle within the particle's
 /// pair support with the boundary: the lists by brute force, for small hand-built scenes.
 void bruteForceLists(const ParticleSet& p, const BoundarySet& boundary, NeighborList& fluidNbrs,
@@ -120,6 +118,8 @@ void addRestingBlock(ParticleSet& p, Real m, Real H, Real r, Real rho) {
               Vec3::Zero(), m, H, rho);
 }
 
+/// A jittered cloud of particles of mixed masses inside a container, with neighbour lists, ready for one
+/// adaptation step.
 struct Neighbourhood {
   SimParams params;
   ParticleSet p;

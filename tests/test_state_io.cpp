@@ -110,20 +110,8 @@ TEST_P(StateIo, ResumedRunIsBitIdenticalOnOneThread) {
 TEST(StateIoTimeLevels, AResumedRunCountsTheHeldParticleStepsOfTheWholeRun) {
   // With time levels (time_levels = 2) coarse particles are held in every other step: the run's held and
   // level-1 particle-steps come with the state, so a resumed run reports the whole run's.
-  // (the scene of TimeLevelsTest.TankAtRestSmallStaysStillWithHeldParticles, coarser: a sphere spinning in
-  // the air sets a step that the water at rest may take twice)
   tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
-  sim::SceneDesc scene = fp::test::tankScene(sim::Vec3d(0.2, 0.2, 0.2), sim::Vec3d(-0.2, 0.0, -0.2),
-                                             sim::Vec3d(0.2, 0.3, 0.2), 0.2 / 20.4);
-  scene.mode = sim::AdaptivityMode::FluidPlaying;
-  scene.params.timeLevels = 2;
-  sim::ColliderDesc spinner;
-  spinner.name = "spinner";
-  spinner.shape = sim::ShapeType::Sphere;
-  spinner.radius = 0.02;
-  spinner.position = sim::Vec3d(0.0, 0.37, 0.0);
-  spinner.angularVelocity = sim::Vec3d(0.0, 0.0, 187.0);
-  scene.colliders.push_back(spinner);
+  const sim::SceneDesc scene = fp::test::heldWaterScene();
   // Saved after a step that held particles (30 steps: the next one is synchronised and must give them the
   // gravity of the step they drifted through) and after a synchronised one (31: the next one holds and counts
   // the last synchronised step's level-1 particles).

@@ -13,6 +13,7 @@
 #include "tests/scene_fixtures.h"
 
 using namespace fp::sim;
+using fp::test::heldWaterScene;
 using fp::test::tankScene;
 
 namespace {
@@ -34,19 +35,10 @@ struct MomentumBudget {
 }  // namespace
 
 TEST(TimeLevelsTest, TankAtRestSmallStaysStillWithHeldParticles) {
-  SceneDesc scene = tankScene(Vec3d(0.2, 0.2, 0.2), Vec3d(-0.2, 0.0, -0.2), Vec3d(0.2, 0.3, 0.2), 0.2 / 20.4);
-  scene.mode = AdaptivityMode::FluidPlaying;
-  scene.params.timeLevels = 2;
   // Water at rest alone steps dt_max, and a doubled step would pass it: nothing is held. A sphere spinning in
   // the air above the water (3.7 m/s at its surface, 5 cm clear of it) sets the step instead, at about 2 ms,
   // as a hand does: the water at rest may then take every other step.
-  ColliderDesc spinner;
-  spinner.name = "spinner";
-  spinner.shape = ShapeType::Sphere;
-  spinner.radius = 0.02;
-  spinner.position = Vec3d(0.0, 0.37, 0.0);
-  spinner.angularVelocity = Vec3d(0.0, 0.0, 187.0);
-  scene.colliders.push_back(spinner);
+  const SceneDesc scene = heldWaterScene();
   Simulation sim(scene);
   const double mass0 = sim.totalMass();
   while (sim.time() < 1.0)
