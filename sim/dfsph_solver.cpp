@@ -49,6 +49,12 @@ constexpr Real kMinFactorDenominatorShare = Real(0.3);
 // 0.6-0.8 from their fluid neighbours: they are not caged.)
 constexpr Real kCagedBoundaryDensity = Real(0.8);
 constexpr Real kCagedFluidDensity = Real(0.5);
+// A small cluster shut in together (the fist replay on the r = 5 mm tank, seed 35: four particles, each with
+// 1-3 fluid neighbours and the boundary giving 0.4-0.8 of the rest density, 1.1-1.25 in all) is caged one by
+// one: once some of it is, the others count their caged neighbours as cage. A particle needs this much of its
+// rest density from the boundary itself to be caged that way, so a cage never spreads into water that no
+// boundary touches (a flat wall gives about 0.5).
+constexpr Real kCagedClusterBoundaryDensity = Real(0.3);
 
 using Range = tbb::blocked_range<std::size_t>;
 
@@ -103,6 +109,7 @@ double DfsphSolver::densityAndFactor(SolverContext& ctx, LevelSums* levels) {
   const Vec3* v = p.v.data();
   const Real* m = p.m.data();
   const Real* H = p.H.data();
+  const std::uint32_t* flags = p.flags.data();
   const Vec3* xb = ctx.boundary.x.data();
   const Real* psi = ctx.boundary.psi.data();
   const std::uint32_t* fo = ctx.fluidNbrs.offsets.data();
@@ -218,8 +225,23 @@ double DfsphSolver::densityAndFactor(SolverContext& ctx, LevelSums* levels) {
       m_full[i] = neighborMass >= (kMinNeighborsForWarmStart - Real(0.5) - boundaryCount) * m[i];
       const Real denom =
           std::max(gradSum.squaredNorm() + sqSum, kMinFactorDenominatorShare * (sqSum + sqBoundary));
-      m_caged[i] =
+      bool caged =
           boundaryDensity >= kCagedBoundaryDensity && density - boundaryDensity - self < kCagedFluidDensity;
+      if (!caged && boundaryDensity >= kCagedClusterBoundaryDensity &&
+          density - self >= kCagedBoundaryDensity) {
+        // a cluster shut in together: fluid neighbours caged in the last step move with the cage, not with
+        // this particle's stiffness, so their share counts as cage (kCagedClusterBoundaryDensity)
+        Real cage = 0;
+        const std::uint32_t* fr = flags + base;
+        for (std::uint32_t k = fo[i]; k < fo[i + 1]; ++k) {
+          const auto j = fj.offset(k);
+          if (fr[j] & kFlagCaged)
+            cage += mr[j] * invRho0 * CubicSpline::w((xi - xr[j]).norm(), pairSupport(Hi, Hr[j]));
+        }
+        caged = boundaryDensity + cage >= kCagedBoundaryDensity &&
+                density - boundaryDensity - self - cage < kCagedFluidDensity;
+      }
+      m_caged[i] = caged;
       m_factor[i] = denom > kEps && !m_caged[i] ? Real(1) / denom : Real(0);
       if (m_caged[i]) {  // nor a warm start: the stiffness it had when it was caged no longer pushes
         p.kappa[i] = 0;
@@ -631,8 +653,20 @@ void DfsphSolver::shrinkToFit() {
 std::size_t DfsphSolver::carryCaged(SolverContext& ctx) {
   ParticleSet& p = ctx.fluid;
   const std::size_t n = std::min(p.size(), m_caged.size());
-  parallelSelect(n, 4096, m_cagedList, [&](std::size_t i) { return m_caged[i] != 0; });
-  if (m_cagedList.empty())
+  // the particles caged now, and those caged in the last step
+  parallelSelect(n, 4096, m_cagedList,
+                 [&](std::size_t i) { return m_caged[i] != 0 || (p.flags[i] & kFlagCaged) != 0; });
+  // the next density pass reads who is caged now (a cluster shut in together, kCagedClusterBoundaryDensity)
+  std::size_t count = 0;
+  for (const std::uint32_t i : m_cagedList) {
+    if (m_caged[i]) {
+      p.flags[i] |= kFlagCaged;
+      ++count;
+    } else {
+      p.flags[i] &= ~std::uint32_t(kFlagCaged);
+    }
+  }
+  if (count == 0)
     return 0;
   const Real Hb = ctx.boundary.support();
   const Vec3* xb = ctx.boundary.x.data();
@@ -642,6 +676,8 @@ std::size_t DfsphSolver::carryCaged(SolverContext& ctx) {
   // the cage's velocity at the particle: its boundary neighbours' velocities weighted as in its density
   m_boundaryImpulse += deterministicSum(m_cagedList.size(), Vec3d(Vec3d::Zero()), [&](std::size_t k) {
     const std::uint32_t i = m_cagedList[k];
+    if (!m_caged[i])
+      return Vec3d(Vec3d::Zero());
     const Real hb = pairSupport(p.H[i], Hb);
     Vec3 weighted = Vec3::Zero();
     Real weight = 0;
@@ -658,7 +694,7 @@ std::size_t DfsphSolver::carryCaged(SolverContext& ctx) {
     p.v[i] = carried;
     return given;
   });
-  return m_cagedList.size();
+  return count;
 }
 
 std::size_t DfsphSolver::memoryBytes() const {

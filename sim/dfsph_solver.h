@@ -72,9 +72,11 @@ class DfsphSolver {
   static void integrateVelocities(SolverContext& ctx, Real dt);
   /// Sets the velocity of every particle that the last density pass found caged (its boundary neighbours
   /// alone fill 0.8 of its rest density, its fluid neighbours under half: water shut in a closing hand, which
-  /// cannot lower its density by moving) to its boundary neighbours' kernel-weighted velocity: it moves with
-  /// the cage, and its factor is zero, so it exerts no stiffness. The momentum this gives is counted in
-  /// boundaryImpulse(). Returns the number of caged particles.
+  /// cannot lower its density by moving; fluid neighbours caged in the step before count as boundary for a
+  /// particle the boundary reaches by 0.3) to its boundary neighbours' kernel-weighted velocity: it moves
+  /// with the cage, and its factor is zero, so it exerts no stiffness. The momentum this gives is counted in
+  /// boundaryImpulse(). Sets kFlagCaged on the caged particles and clears it on the others, for the next
+  /// density pass. Returns the number of caged particles.
   std::size_t carryCaged(SolverContext& ctx);
   /// 1 where the last density pass found the particle caged (see carryCaged)
   const std::vector<std::uint8_t>& caged() const { return m_caged; }

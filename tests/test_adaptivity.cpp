@@ -94,6 +94,8 @@ void bruteForceLists(const ParticleSet& p, const BoundarySet& boundary, Neighbor
                      NeighborList& boundaryNbrs) {
   fluidNbrs.offsets.assign(1, 0);
   boundaryNbrs.offsets.assign(1, 0);
+  fluidNbrs.indices.clear();
+  boundaryNbrs.indices.clear();
   for (std::size_t i = 0; i < p.size(); ++i) {
     for (std::size_t j = 0; j < p.size(); ++j) {
       if (j != i && (p.x[i] - p.x[j]).norm() < pairSupport(p.H[i], p.H[j]))
@@ -1845,4 +1847,121 @@ TEST(SolverTest, AParticleCagedByAMovingBoundaryMovesWithItSmall) {
   const Vec3d impulse = solver.boundaryImpulse() - impulseBefore;
   EXPECT_GT(impulse.norm(), 0.01);
   EXPECT_LT((momentumAfter - momentumBefore - impulse).norm(), 1e-6 * impulse.norm());
+}
+
+TEST(SolverTest, AClusterShutInTogetherIsCagedWholeSmall) {
+  // Three particles shut in together between two plates 1.8 r apart that move at 0.4 m/s (water in a
+  // closing fist: the r = 5 mm replay's seed 35 had four). The outer two read more than 0.8 of their rest
+  // density from the plates and under half from their neighbours: caged. The middle one reads more than half
+  // from its two neighbours, so that rule leaves it free, and the solves pushed such a particle about like a
+  // pinball (to 8.2 m/s in the replay). From the next density pass on its caged neighbours count as cage, and
+  // it is caged too. A particle in the air among six flagged as caged is not: the boundary must itself give
+  // 0.3 of the rest density. Nor is a block resting on a floor.
+  const Real r = Real(0.01);
+  SimParams params;
+  params.particleRadius = r;
+  const Real m = Real(params.restDensity * 8.0 * double(r) * r * r);
+  const Real H = supportForMass(m, m, r);
+  const Vec3d cageVelocity(0.4, -0.1, 0.0);
+  std::vector<ColliderState> colliders(3);
+  colliders[0].desc.shape = ShapeType::Box;  // a floor, static, under a block of fluid
+  colliders[0].desc.halfExtents = Vec3d(0.1, 0.02, 0.1);
+  colliders[0].position = Vec3d(0.5, -0.02, 0.0);
+  for (int s = 1; s < 3; ++s) {  // the cage's plates, faces at y = +-0.9 r, from x = -4 r to 4 r
+    ColliderState& c = colliders[std::size_t(s)];
+    c.desc.shape = ShapeType::Box;
+    c.desc.halfExtents = Vec3d(4 * r, 0.02, 0.1);
+    c.desc.linearVelocity = cageVelocity;
+    c.position = Vec3d(0.0, (s == 1 ? 1.0 : -1.0) * (0.9 * r + 0.02), 0.0);
+    c.linearVelocity = cageVelocity;
+  }
+  BoundarySet boundary;
+  boundary.build(colliders, r);
+  const Real d = Real(0.75) * r;  // the clusters' spacing
+  const Vec3 air(Real(-0.3), Real(0.3), 0);
+  ParticleSet p;
+  p.add(Vec3(-d, 0, 0), Vec3(0, 2, 0), m, H, Real(params.restDensity));  // 0-2 in the cage
+  p.add(Vec3::Zero(), Vec3(0, -2, 0), m, H, Real(params.restDensity));
+  p.add(Vec3(d, 0, 0), Vec3(0, 1, 0), m, H, Real(params.restDensity));
+  p.add(air, Vec3(0, -2, 0), m, H, Real(params.restDensity));  // 3 in the air, among six flagged as caged
+  for (int axis = 0; axis < 3; ++axis) {
+    for (const Real side : {Real(-1), Real(1)}) {
+      p.add(air + side * d * Vec3::Unit(axis), Vec3::Zero(), m, H, Real(params.restDensity));
+      p.flags.back() |= kFlagCaged;
+    }
+  }
+  addRestingBlock(p, m, H, r, Real(params.restDensity));
+  NeighborList fluidNbrs, boundaryNbrs;
+  bruteForceLists(p, boundary, fluidNbrs, boundaryNbrs);
+  // the shares of the rest density from the boundary and from the fluid neighbours, by their definitions
+  auto shares = [&](std::size_t i) {
+    double fromBoundary = 0.0, fromFluid = 0.0;
+    const double sb = double(boundary.volumeScale(p.H[i]));
+    for (std::uint32_t k = boundaryNbrs.offsets[i]; k < boundaryNbrs.offsets[i + 1]; ++k) {
+      const std::uint32_t b = boundaryNbrs.indices[k];
+      fromBoundary +=
+          sb * double(boundary.psi[b]) *
+          double(CubicSpline::w((p.x[i] - boundary.x[b]).norm(), pairSupport(p.H[i], boundary.support())));
+    }
+    for (std::uint32_t k = fluidNbrs.offsets[i]; k < fluidNbrs.offsets[i + 1]; ++k) {
+      const std::uint32_t j = fluidNbrs.indices[k];
+      fromFluid += double(p.m[j]) / params.restDensity *
+                   double(CubicSpline::w((p.x[i] - p.x[j]).norm(), pairSupport(p.H[i], p.H[j])));
+    }
+    return std::pair<double, double>(fromBoundary, fromFluid);
+  };
+  const auto [outerBoundary, outerFluid] = shares(0);
+  const auto [middleBoundary, middleFluid] = shares(1);
+  std::printf(
+      "cage: the outer particles read %.3f from the plates and %.3f from the fluid, the middle one %.3f "
+      "and %.3f\n",
+      outerBoundary, outerFluid, middleBoundary, middleFluid);
+  ASSERT_GE(outerBoundary, 0.8);
+  ASSERT_LT(outerFluid, 0.5);
+  ASSERT_GE(middleFluid, 0.5);
+  // in the air the flagged neighbours alone give more than 0.8: only the boundary's own 0.3 is missing
+  const auto [airBoundary, airFluid] = shares(3);
+  ASSERT_EQ(boundaryNbrs.count(3), 0u);
+  ASSERT_EQ(airBoundary, 0.0);
+  ASSERT_GE(airFluid, 0.8 + 0.1);
+  DfsphSolver solver;
+  SolverContext ctx{p, boundary, fluidNbrs, boundaryNbrs, params};
+  auto cagedOnes = [&] {
+    std::vector<std::size_t> caged;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+      if (solver.caged()[i]) {
+        caged.push_back(i);
+        EXPECT_EQ(solver.factors()[i], Real(0)) << "particle " << i;
+      } else {
+        EXPECT_GT(solver.factors()[i], Real(0)) << "particle " << i;
+      }
+    }
+    return caged;
+  };
+  // the first pass: the plates cage the outer two (no one in the cage was caged before it; in the air the
+  // flags give no cage without a boundary)
+  solver.computeDensityAndFactor(ctx);
+  EXPECT_EQ(cagedOnes(), (std::vector<std::size_t>{0, 2}));
+  EXPECT_EQ(solver.carryCaged(ctx), 2u);
+  for (std::size_t i = 0; i < 10; ++i)
+    EXPECT_EQ((p.flags[i] & kFlagCaged) != 0, i == 0 || i == 2) << "particle " << i;
+  EXPECT_NEAR(double(p.v[1].y()), -2.0, 1e-6);  // the middle one keeps its own velocity
+  // the next pass: the middle one is caged with them
+  solver.computeDensityAndFactor(ctx);
+  EXPECT_EQ(cagedOnes(), (std::vector<std::size_t>{0, 1, 2}));
+  EXPECT_EQ(solver.carryCaged(ctx), 3u);
+  for (std::size_t i = 0; i < 3; ++i) {
+    EXPECT_NEAR(double(p.v[i].x()), cageVelocity.x(), 1e-6) << "particle " << i;
+    EXPECT_NEAR(double(p.v[i].y()), cageVelocity.y(), 1e-6) << "particle " << i;
+    EXPECT_NEAR(double(p.v[i].z()), cageVelocity.z(), 1e-6) << "particle " << i;
+  }
+  EXPECT_NEAR(double(p.v[3].y()), -2.0, 1e-6);  // the particle in the air moves on
+  // the cage opens (the plates gone): nobody is caged, and the flags are cleared
+  boundary.build({}, r);
+  bruteForceLists(p, boundary, fluidNbrs, boundaryNbrs);
+  solver.computeDensityAndFactor(ctx);
+  EXPECT_TRUE(cagedOnes().empty());
+  EXPECT_EQ(solver.carryCaged(ctx), 0u);
+  for (std::size_t i = 0; i < p.size(); ++i)
+    EXPECT_EQ(p.flags[i] & kFlagCaged, 0u) << "particle " << i;
 }
