@@ -834,7 +834,9 @@ AdaptivityStats Adaptivity::adapt(const AdaptContext& ctx, bool ignoreDelay, boo
       p.kappa[c] = p.kappa[o];
       p.kappaV[c] = p.kappaV[o];
       p.splitTime[c] = Real(ctx.time);
-      p.flags[c] = kFlagSplit | (p.flags[o] & kFlagSurface);
+      // (a parent caged by the boundary alone leaves its children counted as cage until the next density
+      // pass finds out for itself)
+      p.flags[c] = kFlagSplit | (p.flags[o] & (kFlagSurface | kFlagCaged));
       p.levelPhi[c] = p.levelPhi[o];
       p.levelOmega[c] = p.levelOmega[o];
       p.levelNu[c] = p.levelNu[o];

@@ -50,10 +50,12 @@ constexpr Real kMinFactorDenominatorShare = Real(0.3);
 constexpr Real kCagedBoundaryDensity = Real(0.8);
 constexpr Real kCagedFluidDensity = Real(0.5);
 // A small cluster shut in together (the fist replay on the r = 5 mm tank, seed 35: four particles, each with
-// 1-3 fluid neighbours and the boundary giving 0.4-0.8 of the rest density, 1.1-1.25 in all) is caged one by
-// one: once some of it is, the others count their caged neighbours as cage. A particle needs this much of its
-// rest density from the boundary itself to be caged that way, so a cage never spreads into water that no
-// boundary touches (a flat wall gives about 0.5).
+// 1-3 fluid neighbours and the boundary giving 0.4-0.8 of the rest density, 1.1-1.25 in all): once the
+// boundary alone cages some of it, the others count those neighbours as cage. A particle needs this much of
+// its rest density from the boundary itself to be caged that way, so a cage never spreads into water that no
+// boundary touches (a flat wall gives about 0.5). Only particles that the boundary alone caged count as cage
+// (kFlagCaged): a cluster whose members counted each other would hold itself caged on one wall of an opened
+// cage (a palm) and be carried with it.
 constexpr Real kCagedClusterBoundaryDensity = Real(0.3);
 
 using Range = tbb::blocked_range<std::size_t>;
@@ -225,12 +227,14 @@ double DfsphSolver::densityAndFactor(SolverContext& ctx, LevelSums* levels) {
       m_full[i] = neighborMass >= (kMinNeighborsForWarmStart - Real(0.5) - boundaryCount) * m[i];
       const Real denom =
           std::max(gradSum.squaredNorm() + sqSum, kMinFactorDenominatorShare * (sqSum + sqBoundary));
-      bool caged =
+      // 1: caged by the boundary alone; 2: caged with a cluster that the boundary cages (see
+      // kCagedClusterBoundaryDensity)
+      std::uint8_t caged =
           boundaryDensity >= kCagedBoundaryDensity && density - boundaryDensity - self < kCagedFluidDensity;
       if (!caged && boundaryDensity >= kCagedClusterBoundaryDensity &&
           density - self >= kCagedBoundaryDensity) {
-        // a cluster shut in together: fluid neighbours caged in the last step move with the cage, not with
-        // this particle's stiffness, so their share counts as cage (kCagedClusterBoundaryDensity)
+        // fluid neighbours that the boundary alone caged in the last step move with the cage, not with this
+        // particle's stiffness: their share counts as cage
         Real cage = 0;
         const std::uint32_t* fr = flags + base;
         for (std::uint32_t k = fo[i]; k < fo[i + 1]; ++k) {
@@ -238,8 +242,9 @@ double DfsphSolver::densityAndFactor(SolverContext& ctx, LevelSums* levels) {
           if (fr[j] & kFlagCaged)
             cage += mr[j] * invRho0 * CubicSpline::w((xi - xr[j]).norm(), pairSupport(Hi, Hr[j]));
         }
-        caged = boundaryDensity + cage >= kCagedBoundaryDensity &&
-                density - boundaryDensity - self - cage < kCagedFluidDensity;
+        if (boundaryDensity + cage >= kCagedBoundaryDensity &&
+            density - boundaryDensity - self - cage < kCagedFluidDensity)
+          caged = 2;
       }
       m_caged[i] = caged;
       m_factor[i] = denom > kEps && !m_caged[i] ? Real(1) / denom : Real(0);
@@ -656,15 +661,16 @@ std::size_t DfsphSolver::carryCaged(SolverContext& ctx) {
   // the particles caged now, and those caged in the last step
   parallelSelect(n, 4096, m_cagedList,
                  [&](std::size_t i) { return m_caged[i] != 0 || (p.flags[i] & kFlagCaged) != 0; });
-  // the next density pass reads who is caged now (a cluster shut in together, kCagedClusterBoundaryDensity)
+  // the next density pass reads who the boundary alone cages now (a cluster shut in together,
+  // kCagedClusterBoundaryDensity); a particle held in this step (time levels) was not evaluated and keeps its
+  // bit
   std::size_t count = 0;
   for (const std::uint32_t i : m_cagedList) {
-    if (m_caged[i]) {
+    count += m_caged[i] != 0;
+    if (m_caged[i] == 1)
       p.flags[i] |= kFlagCaged;
-      ++count;
-    } else {
+    else if (!(ctx.held && ctx.held[i]))
       p.flags[i] &= ~std::uint32_t(kFlagCaged);
-    }
   }
   if (count == 0)
     return 0;

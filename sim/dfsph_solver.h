@@ -72,13 +72,15 @@ class DfsphSolver {
   static void integrateVelocities(SolverContext& ctx, Real dt);
   /// Sets the velocity of every particle that the last density pass found caged (its boundary neighbours
   /// alone fill 0.8 of its rest density, its fluid neighbours under half: water shut in a closing hand, which
-  /// cannot lower its density by moving; fluid neighbours caged in the step before count as boundary for a
-  /// particle the boundary reaches by 0.3) to its boundary neighbours' kernel-weighted velocity: it moves
-  /// with the cage, and its factor is zero, so it exerts no stiffness. The momentum this gives is counted in
-  /// boundaryImpulse(). Sets kFlagCaged on the caged particles and clears it on the others, for the next
-  /// density pass. Returns the number of caged particles.
+  /// cannot lower its density by moving; for a particle the boundary reaches by 0.3, fluid neighbours that
+  /// the boundary alone caged in the step before count as boundary) to its boundary neighbours'
+  /// kernel-weighted velocity: it moves with the cage, and its factor is zero, so it exerts no stiffness. The
+  /// momentum this gives is counted in boundaryImpulse(). Sets kFlagCaged on the particles the boundary alone
+  /// cages and clears it on the others (but those held in this step), for the next density pass. Returns the
+  /// number of caged particles.
   std::size_t carryCaged(SolverContext& ctx);
-  /// 1 where the last density pass found the particle caged (see carryCaged)
+  /// per particle, what the last density pass found (see carryCaged): 1 caged by the boundary alone, 2 caged
+  /// with a cluster that the boundary alone cages (kCagedClusterBoundaryDensity), 0 not caged
   const std::vector<std::uint8_t>& caged() const { return m_caged; }
 
   /// momentum given to the fluid by boundary particles since the last reset [kg m/s]
@@ -112,7 +114,7 @@ class DfsphSolver {
   std::vector<Real> m_k;              // stiffness of the current iteration [m^2/s^2] (in the density pass:
                                       // 1 / rho_i before it, for XSPH)
   std::vector<std::uint8_t> m_full;   // 1 where the neighbourhood is full by count (divergence warm start)
-  std::vector<std::uint8_t> m_caged;  // 1 where the boundary alone fills kCagedBoundaryDensity
+  std::vector<std::uint8_t> m_caged;  // see caged()
   std::vector<std::uint32_t> m_cagedList;  // the caged particles, for carryCaged
   std::vector<Vec3> m_normal;              // surface-tension normals [-]
   std::vector<Real> m_gradF;               // V_j grad W_ij / (x_i - x_j) per fluid pair of this step [1/m^2]
