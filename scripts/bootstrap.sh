@@ -198,6 +198,10 @@ run_tsan_tests() {
 # tests/fuzz/ (see tests/fuzz/README.md). A crash leaves build-fuzz/crash-TARGET-* to reproduce.
 readonly FUZZ_TARGETS=(scene preset pose_track joint_track state)
 run_fuzzers() {
+  [[ "${FUZZ_SECONDS:-30}" =~ ^[1-9][0-9]*$ ]] ||
+    die "FUZZ_SECONDS must be a whole number of seconds above 0, not '${FUZZ_SECONDS}'"
+  [[ "${FUZZ_MIN_RUNS:-1000}" =~ ^(0|[1-9][0-9]*)$ ]] ||
+    die "FUZZ_MIN_RUNS must be a whole number, not '${FUZZ_MIN_RUNS}'"
   section "Fuzz build (libFuzzer, clang, build-fuzz/)"
   command -v clang++ >/dev/null 2>&1 || die "clang++ not found (package clang)"
   # no -Werror here: the Release build holds gcc's warnings at zero; clang's extra ones are only shown

@@ -16,7 +16,8 @@ enum ParticleFlag : std::uint32_t {
   kFlagSplit = 1u << 1,    ///< created by a split (renderer highlight)
   /// the support is its mass's own (Adaptivity::blendSupports): whatever changes the mass clears it
   kFlagSupportSettled = 1u << 2,
-  /// caged in the last step (DfsphSolver::carryCaged): it moves with its boundary, not with its stiffness
+  /// caged by the boundary alone at the last density solve (DfsphSolver::carryCaged; a particle held by the
+  /// time levels keeps it): its fluid neighbours count it as cage
   kFlagCaged = 1u << 3,
 };
 
