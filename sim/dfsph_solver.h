@@ -115,7 +115,7 @@ class DfsphSolver {
                                       // 1 / rho_i before it, for XSPH)
   std::vector<std::uint8_t> m_full;   // 1 where the neighbourhood is full by count (divergence warm start)
   std::vector<std::uint8_t> m_caged;  // see caged()
-  std::vector<std::uint32_t> m_cagedList;  // the caged particles, for carryCaged
+  std::vector<std::uint32_t> m_cagedList;  // caged now or flagged (kFlagCaged), for carryCaged
   std::vector<Vec3> m_normal;              // surface-tension normals [-]
   std::vector<Real> m_gradF;               // V_j grad W_ij / (x_i - x_j) per fluid pair of this step [1/m^2]
   std::vector<Real> m_gradB;     // the same per boundary pair, with the boundary's scaled volume [1/m^2]

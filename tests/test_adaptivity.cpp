@@ -1772,6 +1772,41 @@ TEST(SolverTest, TheFactorOfAParticleInAPocketIsFlooredSmall) {
   EXPECT_LT(worst, 1e-5);
 }
 
+namespace {
+
+/// A floor, static, under addRestingBlock's block, and a cage of two plates whose faces stand at y = +-0.9 r,
+/// within x = +-plateHalfX, moving at `velocity`.
+std::vector<ColliderState> floorAndCage(Real r, double plateHalfX, const Vec3d& velocity) {
+  std::vector<ColliderState> colliders(3);
+  colliders[0].desc.shape = ShapeType::Box;
+  colliders[0].desc.halfExtents = Vec3d(0.1, 0.02, 0.1);
+  colliders[0].position = Vec3d(0.5, -0.02, 0.0);
+  for (int s = 1; s < 3; ++s) {
+    ColliderState& c = colliders[std::size_t(s)];
+    c.desc.shape = ShapeType::Box;
+    c.desc.halfExtents = Vec3d(plateHalfX, 0.02, 0.1);
+    c.desc.linearVelocity = velocity;
+    c.position = Vec3d(0.0, (s == 1 ? 1.0 : -1.0) * (0.9 * double(r) + 0.02), 0.0);
+    c.linearVelocity = velocity;
+  }
+  return colliders;
+}
+
+/// The share of particle i's rest density that its boundary neighbours give, from its definition.
+double boundaryShare(const ParticleSet& p, const BoundarySet& boundary, const NeighborList& boundaryNbrs,
+                     std::size_t i) {
+  double share = 0.0;
+  const double sb = double(boundary.volumeScale(p.H[i]));
+  for (std::uint32_t k = boundaryNbrs.offsets[i]; k < boundaryNbrs.offsets[i + 1]; ++k) {
+    const std::uint32_t b = boundaryNbrs.indices[k];
+    share += sb * double(boundary.psi[b]) *
+             double(CubicSpline::w((p.x[i] - boundary.x[b]).norm(), pairSupport(p.H[i], boundary.support())));
+  }
+  return share;
+}
+
+}  // namespace
+
 TEST(SolverTest, AParticleCagedByAMovingBoundaryMovesWithItSmall) {
   // Water shut in a closing fist: two particles between two plates 1.8 r apart that move together at 0.4
   // m/s, the boundary alone reading more than 0.8 of their rest density. It cannot lower its density by
@@ -1784,18 +1819,7 @@ TEST(SolverTest, AParticleCagedByAMovingBoundaryMovesWithItSmall) {
   const Real m = Real(params.restDensity * 8.0 * double(r) * r * r);
   const Real H = supportForMass(m, m, r);
   const Vec3d cageVelocity(0.4, -0.1, 0.0);
-  std::vector<ColliderState> colliders(3);
-  colliders[0].desc.shape = ShapeType::Box;  // a floor, static, under a block of fluid
-  colliders[0].desc.halfExtents = Vec3d(0.1, 0.02, 0.1);
-  colliders[0].position = Vec3d(0.5, -0.02, 0.0);
-  for (int s = 1; s < 3; ++s) {  // the cage's plates, faces at y = +-0.9 r
-    ColliderState& c = colliders[std::size_t(s)];
-    c.desc.shape = ShapeType::Box;
-    c.desc.halfExtents = Vec3d(0.1, 0.02, 0.1);
-    c.desc.linearVelocity = cageVelocity;
-    c.position = Vec3d(0.0, (s == 1 ? 1.0 : -1.0) * (0.9 * r + 0.02), 0.0);
-    c.linearVelocity = cageVelocity;
-  }
+  const std::vector<ColliderState> colliders = floorAndCage(r, 0.1, cageVelocity);
   BoundarySet boundary;
   boundary.build(colliders, r);
   ASSERT_GT(boundary.size(), boundary.staticCount());
@@ -1809,15 +1833,8 @@ TEST(SolverTest, AParticleCagedByAMovingBoundaryMovesWithItSmall) {
   SolverContext ctx{p, boundary, fluidNbrs, boundaryNbrs, params};
   solver.computeDensityAndFactor(ctx);
   // the boundary's share of the caged particle's density, from its definition
-  double boundaryShare = 0.0;
-  const double sb = double(boundary.volumeScale(p.H[0]));
-  for (std::uint32_t k = boundaryNbrs.offsets[0]; k < boundaryNbrs.offsets[1]; ++k) {
-    const std::uint32_t b = boundaryNbrs.indices[k];
-    boundaryShare +=
-        sb * double(boundary.psi[b]) *
-        double(CubicSpline::w((p.x[0] - boundary.x[b]).norm(), pairSupport(p.H[0], boundary.support())));
-  }
-  ASSERT_GE(boundaryShare, 0.8);
+  const double share = boundaryShare(p, boundary, boundaryNbrs, 0);
+  ASSERT_GE(share, 0.8);
   for (std::size_t i = 0; i < 2; ++i) {
     EXPECT_EQ(solver.caged()[i], 1) << "particle " << i;
     EXPECT_EQ(solver.factors()[i], Real(0)) << "particle " << i;
@@ -1834,7 +1851,7 @@ TEST(SolverTest, AParticleCagedByAMovingBoundaryMovesWithItSmall) {
   EXPECT_EQ(solver.carryCaged(ctx), 2u);
   std::printf(
       "caged: the boundary gives %.3f of the rest density; velocity (0, 3, 0) -> (%.3f, %.3f, %.3f) m/s\n",
-      boundaryShare, double(p.v[0].x()), double(p.v[0].y()), double(p.v[0].z()));
+      share, double(p.v[0].x()), double(p.v[0].y()), double(p.v[0].z()));
   for (std::size_t i = 0; i < 2; ++i) {
     EXPECT_NEAR(double(p.v[i].x()), cageVelocity.x(), 1e-6) << "particle " << i;
     EXPECT_NEAR(double(p.v[i].y()), cageVelocity.y(), 1e-6) << "particle " << i;
@@ -1864,18 +1881,7 @@ TEST(SolverTest, AClusterShutInTogetherIsCagedWholeSmall) {
   const Real m = Real(params.restDensity * 8.0 * double(r) * r * r);
   const Real H = supportForMass(m, m, r);
   const Vec3d cageVelocity(0.4, -0.1, 0.0);
-  std::vector<ColliderState> colliders(3);
-  colliders[0].desc.shape = ShapeType::Box;  // a floor, static, under a block of fluid
-  colliders[0].desc.halfExtents = Vec3d(0.1, 0.02, 0.1);
-  colliders[0].position = Vec3d(0.5, -0.02, 0.0);
-  for (int s = 1; s < 3; ++s) {  // the cage's plates, faces at y = +-0.9 r, from x = -4 r to 4 r
-    ColliderState& c = colliders[std::size_t(s)];
-    c.desc.shape = ShapeType::Box;
-    c.desc.halfExtents = Vec3d(4 * r, 0.02, 0.1);
-    c.desc.linearVelocity = cageVelocity;
-    c.position = Vec3d(0.0, (s == 1 ? 1.0 : -1.0) * (0.9 * r + 0.02), 0.0);
-    c.linearVelocity = cageVelocity;
-  }
+  std::vector<ColliderState> colliders = floorAndCage(r, 4 * double(r), cageVelocity);  // plates to x = +-4 r
   BoundarySet boundary;
   boundary.build(colliders, r);
   const Real d = Real(0.75) * r;  // the clusters' spacing
@@ -1896,14 +1902,8 @@ TEST(SolverTest, AClusterShutInTogetherIsCagedWholeSmall) {
   bruteForceLists(p, boundary, fluidNbrs, boundaryNbrs);
   // the shares of the rest density from the boundary and from the fluid neighbours, by their definitions
   auto shares = [&](std::size_t i) {
-    double fromBoundary = 0.0, fromFluid = 0.0;
-    const double sb = double(boundary.volumeScale(p.H[i]));
-    for (std::uint32_t k = boundaryNbrs.offsets[i]; k < boundaryNbrs.offsets[i + 1]; ++k) {
-      const std::uint32_t b = boundaryNbrs.indices[k];
-      fromBoundary +=
-          sb * double(boundary.psi[b]) *
-          double(CubicSpline::w((p.x[i] - boundary.x[b]).norm(), pairSupport(p.H[i], boundary.support())));
-    }
+    const double fromBoundary = boundaryShare(p, boundary, boundaryNbrs, i);
+    double fromFluid = 0.0;
     for (std::uint32_t k = fluidNbrs.offsets[i]; k < fluidNbrs.offsets[i + 1]; ++k) {
       const std::uint32_t j = fluidNbrs.indices[k];
       fromFluid += double(p.m[j]) / params.restDensity *
