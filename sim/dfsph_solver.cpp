@@ -38,20 +38,20 @@ constexpr Real kMinNeighborsForWarmStart = Real(20);
 constexpr Real kMinFactorDenominatorShare = Real(0.3);
 // A particle whose boundary neighbours alone fill this share of its rest density, and its fluid neighbours
 // less than kCagedFluidDensity, is caged: shut in by boundary on nearly every side, as water in a closing
-// fist is (a flat wall gives at most about 0.5, a corner of the tank 0.7). Over the first seconds of the dam
-// break, the propeller and the hand tank with the splash and aggressive hands (20 million particle-steps),
-// the boundary reached 0.8 three times, each with more than 4 fluid neighbours; in the two-hand replay whose
-// left hand closes into a fist under water, 64 particle-steps in 1.25 million did, all with 1-4 fluid
-// neighbours giving at most 0.2. Such a particle cannot lower its density by moving (the cage is smaller than
-// its spacing), and the solves made it rattle between the fist's walls ever faster as its speed shrank the
-// step: 20-55 m/s, or an instability. It exerts no stiffness (its factor is zero) and moves with the cage
-// (carryCaged). (Heavy particles jittered into the corners of a tank read 0.8-0.95 from the walls, but
-// 0.6-0.8 from their fluid neighbours: they are not caged.) The cage must also hold a moving collider's
-// particles: static walls cannot close, and a particle at them can always lower its density by leaving. A
-// lone fine particle reads 0.8 from a flat wall at 0.8 r from its particles (at a tank's edge within
-// about 1.4 r of both walls, in a corner within 1.65 r): caged by static walls, it would take their zero
-// velocity and never leave, a droplet that a hand pressed on the tank's wall hanging on it for good. (Pressed
-// on a moving collider alone, a palm, it would still be carried with it; no run has shown either:
+// fist is (water at a flat wall typically reads about 0.5 from it, in a corner of the tank 0.7). Over the
+// first seconds of the dam break, the propeller and the hand tank with the splash and aggressive hands (20
+// million particle-steps), the boundary reached 0.8 three times, each with more than 4 fluid neighbours; in
+// the two-hand replay whose left hand closes into a fist under water, 64 particle-steps in 1.25 million did,
+// all with 1-4 fluid neighbours giving at most 0.2. Such a particle cannot lower its density by moving (the
+// cage is smaller than its spacing), and the solves made it rattle between the fist's walls ever faster as
+// its speed shrank the step: 20-55 m/s, or an instability. It exerts no stiffness (its factor is zero) and
+// moves with the cage (carryCaged). (Heavy particles jittered into the corners of a tank read 0.8-0.95 from
+// the walls, but 0.6-0.8 from their fluid neighbours: they are not caged.) The cage must also hold a moving
+// collider's particles: static walls cannot close, and a particle at them can always lower its density by
+// leaving. A lone fine particle reads 0.8 from a flat wall at 0.8 r from its particles (at a tank's edge
+// within about 1.4 r of both walls, in a corner within 1.65 r): caged by static walls, it would take their
+// zero velocity and never leave, a droplet that a hand pressed on the tank's wall hanging on it for good.
+// (Pressed on a moving collider alone, a palm, it would still be carried with it; no run has shown either:
 // docs/method.md, A cage moves.)
 constexpr Real kCagedBoundaryDensity = Real(0.8);
 constexpr Real kCagedFluidDensity = Real(0.5);

@@ -71,10 +71,11 @@ class DfsphSolver {
   /// v_i += dt a_i (the non-pressure acceleration)
   static void integrateVelocities(SolverContext& ctx, Real dt);
   /// Sets the velocity of every particle that the last density pass found caged (its boundary neighbours
-  /// alone fill 0.8 of its rest density, its fluid neighbours under half: water shut in a closing hand, which
-  /// cannot lower its density by moving; for a particle the boundary reaches by 0.3, fluid neighbours that
-  /// the boundary alone caged in the step before count as boundary) to its boundary neighbours'
-  /// kernel-weighted velocity: it moves with the cage, and its factor is zero, so it exerts no stiffness. The
+  /// alone fill 0.8 of its rest density, its fluid neighbours under half, and they include a moving
+  /// collider's particles: water shut in a closing hand, which cannot lower its density by moving; for a
+  /// particle the boundary reaches by 0.3, fluid neighbours that the boundary alone caged in the step before
+  /// count as boundary) to its boundary neighbours' kernel-weighted velocity: it moves with the cage, and its
+  /// factor is zero, so it exerts no stiffness. The
   /// momentum this gives is counted in boundaryImpulse(). Sets kFlagCaged on the particles the boundary alone
   /// cages and clears it on the others (but those held in this step), for the next density pass. Returns the
   /// number of caged particles.
