@@ -239,8 +239,8 @@ double DfsphSolver::densityAndFactor(SolverContext& ctx, LevelSums* levels) {
       // 1: caged by the boundary alone; 2: caged with a cluster that the boundary cages (see
       // kCagedClusterBoundaryDensity)
       std::uint8_t caged = boundaryDensity >= kCagedBoundaryDensity &&
-                           density - boundaryDensity - self < kCagedFluidDensity && bo[i + 1] > bo[i] &&
-                           bi[bo[i + 1] - 1] >= firstMoving;
+                           density - boundaryDensity - self < kCagedFluidDensity &&
+                           bi[bo[i + 1] - 1] >= firstMoving;  // (a share of 0.8 needs a non-empty list)
       if (!caged && boundaryDensity >= kCagedClusterBoundaryDensity &&
           density - self >= kCagedBoundaryDensity) {
         // fluid neighbours that the boundary alone caged in the last step move with the cage, not with this

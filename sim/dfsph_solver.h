@@ -75,10 +75,9 @@ class DfsphSolver {
   /// collider's particles: water shut in a closing hand, which cannot lower its density by moving; for a
   /// particle the boundary reaches by 0.3, fluid neighbours that the boundary alone caged in the step before
   /// count as boundary) to its boundary neighbours' kernel-weighted velocity: it moves with the cage, and its
-  /// factor is zero, so it exerts no stiffness. The
-  /// momentum this gives is counted in boundaryImpulse(). Sets kFlagCaged on the particles the boundary alone
-  /// cages and clears it on the others (but those held in this step), for the next density pass. Returns the
-  /// number of caged particles.
+  /// factor is zero, so it exerts no stiffness. The momentum this gives is counted in boundaryImpulse(). Sets
+  /// kFlagCaged on the particles the boundary alone cages and clears it on the others (but those held in this
+  /// step), for the next density pass. Returns the number of caged particles.
   std::size_t carryCaged(SolverContext& ctx);
   /// per particle, what the last density pass found (see carryCaged): 1 caged by the boundary alone, 2 caged
   /// with a cluster that the boundary alone cages (kCagedClusterBoundaryDensity), 0 not caged

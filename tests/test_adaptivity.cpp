@@ -110,6 +110,11 @@ void bruteForceLists(const ParticleSet& p, const BoundarySet& boundary, Neighbor
   }
 }
 
+/// The mass of a particle of radius r on the rest lattice (spacing 2 r) at the rest density of `params` [kg].
+Real restLatticeMass(const SimParams& params, Real r) {
+  return Real(params.restDensity * 8.0 * double(r) * r * r);
+}
+
 /// A 6 x 4 x 6 lattice block of spacing 2r at rest on a floor whose top is y = 0, x from 0.45 m, z from -0.05
 /// m.
 void addRestingBlock(ParticleSet& p, Real m, Real H, Real r, Real rho) {
@@ -136,7 +141,7 @@ struct Neighbourhood {
     const Real r = Real(0.01);
     params.particleRadius = r;
     params.transferRate = 0.25;
-    mFine = Real(params.restDensity * 8.0 * double(r) * r * r);
+    mFine = restLatticeMass(params, r);
     ColliderState tank;
     tank.desc.shape = ShapeType::Box;
     tank.desc.container = true;
@@ -1574,7 +1579,7 @@ TEST(DivergenceSolveTest, AFineParticleAmongCoarseOnesIsSolvedASurfaceParticleIs
   const Real r = Real(0.01);
   SimParams params;
   params.particleRadius = r;
-  const Real mFine = Real(params.restDensity * 8.0 * double(r) * r * r);
+  const Real mFine = restLatticeMass(params, r);
   const Real mCoarse = Real(27) * mFine;
   std::vector<ColliderState> colliders(1);
   colliders[0].desc.shape = ShapeType::Box;
@@ -1700,7 +1705,7 @@ TEST(DivergenceSolveTest, SprayThatReachedAWallIsNotThrownBackByTheWarmStart) {
   const Real r = Real(0.01);
   SimParams params;
   params.particleRadius = r;
-  const Real m = Real(params.restDensity * 8.0 * double(r) * r * r);
+  const Real m = restLatticeMass(params, r);
   std::vector<ColliderState> colliders(1);
   colliders[0].desc.shape = ShapeType::Box;
   colliders[0].desc.container = true;
@@ -1750,7 +1755,7 @@ TEST(SolverTest, TheFactorOfAParticleInAPocketIsFlooredSmall) {
   const Real r = Real(0.01);
   SimParams params;
   params.particleRadius = r;
-  const Real m = Real(params.restDensity * 8.0 * double(r) * r * r);
+  const Real m = restLatticeMass(params, r);
   const Real H = supportForMass(m, m, r);
   std::vector<ColliderState> colliders(2);
   colliders[0].desc.shape = ShapeType::Sphere;  // a hollow ball around the particle
@@ -1860,7 +1865,7 @@ TEST(SolverTest, AParticleCagedByAMovingBoundaryMovesWithItSmall) {
   const Real r = Real(0.01);
   SimParams params;
   params.particleRadius = r;
-  const Real m = Real(params.restDensity * 8.0 * double(r) * r * r);
+  const Real m = restLatticeMass(params, r);
   const Real H = supportForMass(m, m, r);
   const Vec3d cageVelocity(0.4, -0.1, 0.0);
   const std::vector<ColliderState> colliders = floorAndCage(r, 0.1, cageVelocity);
@@ -1922,7 +1927,7 @@ TEST(SolverTest, AClusterShutInTogetherIsCagedWholeSmall) {
   const Real r = Real(0.01);
   SimParams params;
   params.particleRadius = r;
-  const Real m = Real(params.restDensity * 8.0 * double(r) * r * r);
+  const Real m = restLatticeMass(params, r);
   const Real H = supportForMass(m, m, r);
   const Vec3d cageVelocity(0.4, -0.1, 0.0);
   std::vector<ColliderState> colliders = floorAndCage(r, 4 * double(r), cageVelocity);  // plates to x = +-4 r
@@ -2043,7 +2048,7 @@ TEST(SolverTest, StaticWallsCageNoParticleSmall) {
   const Real r = Real(0.01);
   SimParams params;
   params.particleRadius = r;
-  const Real m = Real(params.restDensity * 8.0 * double(r) * r * r);
+  const Real m = restLatticeMass(params, r);
   const Real H = supportForMass(m, m, r);
   const char* const names[] = {"static", "plates moving", "all moving"};
   for (int config = 0; config < 3; ++config) {
@@ -2111,7 +2116,7 @@ TEST(SolverTest, AHeldParticleKeepsItsCagedBitThroughTheStepItIsNotEvaluatedSmal
   const Real r = Real(0.01);
   SimParams params;
   params.particleRadius = r;
-  const Real m = Real(params.restDensity * 8.0 * double(r) * r * r);
+  const Real m = restLatticeMass(params, r);
   const Real H = supportForMass(m, m, r);
   BoundarySet boundary;
   boundary.build({}, r);
